@@ -1,0 +1,1 @@
+//! Timings of the estimation core behind `mpmwatch bench`.

@@ -1,0 +1,1 @@
+//! One module per command-line verb; each parses its own arguments and calls the library.
