@@ -102,11 +102,7 @@ impl Table {
     pub fn push_column(&mut self, name: impl Into<String>, values: Vec<f64>) -> Result<(), TableError> {
         let name = name.into();
         if values.len() != self.time.len() {
-            return Err(TableError::LengthMismatch {
-                name,
-                expected: self.time.len(),
-                found: values.len(),
-            });
+            return Err(TableError::LengthMismatch { name, expected: self.time.len(), found: values.len() });
         }
         if self.names.iter().any(|n| *n == name) {
             return Err(TableError::DuplicateColumn(name));
@@ -138,14 +134,9 @@ impl Table {
 
     /// One signal by name; the error lists the columns that do exist.
     pub fn column(&self, name: &str) -> Result<&[f64], TableError> {
-        self.names
-            .iter()
-            .position(|n| n == name)
-            .map(|i| self.columns[i].as_slice())
-            .ok_or_else(|| TableError::NoSuchColumn {
-                name: name.to_string(),
-                available: self.names.join(", "),
-            })
+        self.names.iter().position(|n| n == name).map(|i| self.columns[i].as_slice()).ok_or_else(|| {
+            TableError::NoSuchColumn { name: name.to_string(), available: self.names.join(", ") }
+        })
     }
 
     /// Reads a CSV file whose first column is `time`.

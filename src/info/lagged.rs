@@ -1,0 +1,336 @@
+//! Lagged mutual information `I(x(t); y(t+τ))` over a lag range and its mean, the "norm of MI"
+//! of eq 19: does the future of the residual carry information about the past dither?
+//!
+//! Every lag uses the same sample pairs count, `N − τmax − (w − 1)`, so the estimates at
+//! different lags have the same bias and can be averaged and compared with one threshold.
+//!
+//! With an embedding width `w > 1`, X at time t is the vector `(x(t), x(t−1), …, x(t−w+1))`.
+//! An interaction term such as `c·u(t−1)·u(t−2)` driven by an i.i.d. dither is invisible to
+//! every pairwise statistic, because each factor alone is independent of the product; the
+//! pair of consecutive lags sees it (DESIGN.md §2.4).
+
+use serde::Serialize;
+
+use super::discrete::{Levels, ross_sorted};
+use super::estimator::{Estimator, MiOptions, mutual_information};
+use super::ksg::ksg1;
+use super::{InfoError, validate};
+
+/// An inclusive range of non-negative lags, in samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Lags {
+    /// Smallest lag (eq 19's tmin; 1 by default: the dither acts on later residuals).
+    pub min: usize,
+    /// Largest lag (eq 19's tmax).
+    pub max: usize,
+}
+
+impl Lags {
+    /// The range `min..=max`; errors when `min > max`.
+    pub fn new(min: usize, max: usize) -> Result<Self, InfoError> {
+        if min > max {
+            return Err(InfoError::InvalidParameter {
+                name: "lags",
+                value: format!("{min}..={max}"),
+                reason: "the smallest lag exceeds the largest",
+            });
+        }
+        Ok(Self { min, max })
+    }
+
+    /// The lags in order.
+    pub fn iter(&self) -> impl Iterator<Item = usize> + use<> {
+        self.min..=self.max
+    }
+
+    /// Number of lags.
+    pub fn len(&self) -> usize {
+        self.max - self.min + 1
+    }
+
+    /// Never true: a range holds at least one lag.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+}
+
+/// MI against lag for one (x, y) pair.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LaggedProfile {
+    /// The lags, in samples.
+    pub lags: Vec<usize>,
+    /// `I(x(t); y(t+τ))` in nats, one per lag.
+    pub nats: Vec<f64>,
+    /// Sample pairs per lag.
+    pub n_pairs: usize,
+    /// The estimator used.
+    pub estimator: Estimator,
+    /// Embedding width w.
+    pub embedding: usize,
+}
+
+impl LaggedProfile {
+    /// The norm of MI (eq 19): the mean over the lag range, in nats.
+    pub fn norm(&self) -> f64 {
+        norm_of(&self.nats)
+    }
+}
+
+/// Mean of a profile (eq 19).
+pub fn norm_of(profile: &[f64]) -> f64 {
+    profile.iter().sum::<f64>() / profile.len() as f64
+}
+
+enum Path {
+    /// X discrete: the residual sorted once; each lag and each circular shift only relabels.
+    Discrete {
+        levels: Levels,
+        order: Vec<u32>,
+        classes: usize,
+    },
+    Continuous,
+}
+
+/// One (x, y) pair prepared for repeated lagged estimates: the profile itself and its
+/// surrogates (circular shifts of x, or a replacement x) share the preparation.
+pub struct LaggedPair<'a> {
+    x: &'a [f64],
+    y: &'a [f64],
+    lags: Lags,
+    width: usize,
+    k: usize,
+    n_pairs: usize,
+    path: Path,
+}
+
+impl<'a> LaggedPair<'a> {
+    /// Checks the inputs and prepares the estimator path chosen by `opts` for x.
+    pub fn new(
+        x: &'a [f64],
+        y: &'a [f64],
+        lags: Lags,
+        width: usize,
+        opts: &MiOptions,
+    ) -> Result<Self, InfoError> {
+        if width == 0 || width > super::ksg::MAX_X_DIM {
+            return Err(InfoError::InvalidParameter {
+                name: "embedding",
+                value: width.to_string(),
+                reason: "the embedding width must be between 1 and 4",
+            });
+        }
+        validate::same_length("x", x.len(), "y", y.len())?;
+        validate::finite("x", x)?;
+        validate::finite("y", y)?;
+        validate::not_constant("x", x)?;
+        validate::not_constant("y", y)?;
+        let n_pairs = x.len().saturating_sub(lags.max + width - 1);
+        validate::neighbours(&format!("lagged MI up to lag {}", lags.max), n_pairs, opts.k)?;
+        let path = match opts.discrete_levels(x)? {
+            Some(levels) => {
+                let classes = levels.count().pow(width as u32);
+                if classes > u16::MAX as usize {
+                    return Err(InfoError::TooManyLevels {
+                        series: "x (embedded)".into(),
+                        levels: classes,
+                        max: u16::MAX as usize,
+                    });
+                }
+                let mut order: Vec<u32> = (0..y.len() as u32).collect();
+                order.sort_unstable_by(|&a, &b| y[a as usize].total_cmp(&y[b as usize]));
+                Path::Discrete { levels, order, classes }
+            }
+            None => Path::Continuous,
+        };
+        Ok(Self { x, y, lags, width, k: opts.k, n_pairs, path })
+    }
+
+    /// The dither series.
+    pub fn x(&self) -> &'a [f64] {
+        self.x
+    }
+
+    /// Sample pairs per lag.
+    pub fn n_pairs(&self) -> usize {
+        self.n_pairs
+    }
+
+    /// Series length.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Never true: validation rejects empty series.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// The lag range.
+    pub fn lags(&self) -> Lags {
+        self.lags
+    }
+
+    /// True when the discrete-X path is in use.
+    pub fn is_discrete(&self) -> bool {
+        matches!(self.path, Path::Discrete { .. })
+    }
+
+    /// The estimator in use.
+    pub fn estimator(&self) -> Estimator {
+        if self.is_discrete() { Estimator::Ross } else { Estimator::Ksg1 }
+    }
+
+    /// The observed profile.
+    pub fn profile(&self) -> LaggedProfile {
+        LaggedProfile {
+            lags: self.lags.iter().collect(),
+            nats: self.profile_shifted(0),
+            n_pairs: self.n_pairs,
+            estimator: self.estimator(),
+            embedding: self.width,
+        }
+    }
+
+    /// The profile with x circularly shifted by `shift` samples: `x_s(t) = x((t + shift) mod N)`.
+    pub fn profile_shifted(&self, shift: usize) -> Vec<f64> {
+        match &self.path {
+            Path::Discrete { levels, order, classes } => {
+                self.discrete_profile(levels, order, *classes, shift)
+            }
+            Path::Continuous => {
+                if shift == 0 {
+                    self.continuous_profile(self.x)
+                } else {
+                    let n = self.x.len();
+                    let xs: Vec<f64> = (0..n).map(|t| self.x[(t + shift) % n]).collect();
+                    self.continuous_profile(&xs)
+                }
+            }
+        }
+    }
+
+    /// The profile with x replaced by `x_new` (an iAAFT surrogate), always by KSG1 since a
+    /// surrogate of a continuous series is continuous.
+    pub fn profile_with_x(&self, x_new: &[f64]) -> Vec<f64> {
+        debug_assert_eq!(x_new.len(), self.x.len());
+        self.continuous_profile(x_new)
+    }
+
+    fn continuous_profile(&self, x: &[f64]) -> Vec<f64> {
+        let t0 = self.width - 1;
+        let np = self.n_pairs;
+        let cols: Vec<&[f64]> = (0..self.width).map(|d| &x[t0 - d..t0 - d + np]).collect();
+        self.lags.iter().map(|tau| ksg1(&cols, &self.y[t0 + tau..t0 + tau + np], self.k)).collect()
+    }
+
+    fn discrete_profile(&self, levels: &Levels, order: &[u32], classes: usize, shift: usize) -> Vec<f64> {
+        let n = self.x.len();
+        let t0 = self.width - 1;
+        let np = self.n_pairs;
+        let base = levels.count();
+        let label_at = |t: usize| -> u16 {
+            let mut l = 0usize;
+            for d in 0..self.width {
+                l = l * base + levels.labels[(t - d + shift) % n] as usize;
+            }
+            l as u16
+        };
+        let mut ys = Vec::with_capacity(np);
+        let mut labels = Vec::with_capacity(np);
+        self.lags
+            .iter()
+            .map(|tau| {
+                let (lo, hi) = (t0 + tau, t0 + tau + np);
+                ys.clear();
+                labels.clear();
+                for &j in order {
+                    let j = j as usize;
+                    if j >= lo && j < hi {
+                        ys.push(self.y[j]);
+                        labels.push(label_at(j - tau));
+                    }
+                }
+                ross_sorted(&ys, &labels, classes, self.k)
+            })
+            .collect()
+    }
+}
+
+/// MI against lag, `I(x(t); y(t+τ))` for τ in `lags`, with embedding width 1.
+pub fn lagged_profile(
+    x: &[f64],
+    y: &[f64],
+    lags: Lags,
+    opts: &MiOptions,
+) -> Result<LaggedProfile, InfoError> {
+    Ok(LaggedPair::new(x, y, lags, 1, opts)?.profile())
+}
+
+/// The lag where the residual's own memory has died out: the first local minimum of its
+/// auto-MI `I(y(t); y(t+τ))` for τ = 1..=`max_lag` (Abarbanel's rule, which the paper cites
+/// for choosing tmax), or `max_lag` when the auto-MI keeps falling.
+pub fn auto_tmax(y: &[f64], max_lag: usize, k: usize) -> Result<usize, InfoError> {
+    if max_lag < 2 {
+        return Err(InfoError::InvalidParameter {
+            name: "max_lag",
+            value: max_lag.to_string(),
+            reason: "automatic tmax needs at least 2 candidate lags",
+        });
+    }
+    let n = y.len().saturating_sub(max_lag);
+    validate::neighbours("automatic tmax", n, k)?;
+    let opts = MiOptions { x_kind: super::estimator::XKind::Continuous, ..MiOptions::with_k(k) };
+    let mut prev = f64::INFINITY;
+    for tau in 1..=max_lag {
+        let now = mutual_information(&y[..n], &y[tau..tau + n], &opts)?.nats;
+        if now > prev {
+            return Ok(tau - 1);
+        }
+        prev = now;
+    }
+    Ok(max_lag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn discrete_profile_equals_direct_estimates() {
+        let n = 600;
+        let x: Vec<f64> = (0..n).map(|i| if (i * 7 + i / 5) % 3 == 0 { 1.0 } else { -1.0 }).collect();
+        let y: Vec<f64> = (0..n)
+            .map(|t| if t >= 2 { 0.5 * x[t - 2] } else { 0.0 } + ((t * 7919) % 1009) as f64 / 1009.0)
+            .collect();
+        let lags = Lags::new(0, 4).unwrap();
+        let opts = MiOptions::default();
+        let pair = LaggedPair::new(&x, &y, lags, 1, &opts).unwrap();
+        assert!(pair.is_discrete());
+        let prof = pair.profile();
+        let np = n - 4;
+        for (i, tau) in lags.iter().enumerate() {
+            let direct = mutual_information(&x[..np], &y[tau..tau + np], &opts).unwrap().nats;
+            assert!((prof.nats[i] - direct).abs() < 1e-12, "lag {tau}");
+        }
+        // Shifted: same as estimating on an explicitly rotated x.
+        let s = 123;
+        let xs: Vec<f64> = (0..n).map(|t| x[(t + s) % n]).collect();
+        let shifted = pair.profile_shifted(s);
+        for (i, tau) in lags.iter().enumerate() {
+            let direct = mutual_information(&xs[..np], &y[tau..tau + np], &opts).unwrap().nats;
+            assert!((shifted[i] - direct).abs() < 1e-12, "shifted lag {tau}");
+        }
+        // The dependence sits at lag 2.
+        let best = prof.nats.iter().cloned().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0;
+        assert_eq!(prof.lags[best], 2);
+    }
+
+    #[test]
+    fn too_short_for_the_lags_is_an_error() {
+        let x = [1.0, -1.0, 1.0, -1.0, 1.0, 1.0];
+        let y = [0.1, 0.2, 0.3, 0.5, 0.4, 0.0];
+        let err = LaggedPair::new(&x, &y, Lags::new(1, 3).unwrap(), 1, &MiOptions::default()).err().unwrap();
+        assert!(matches!(err, InfoError::TooFewSamples { .. }), "{err}");
+        assert!(Lags::new(3, 1).is_err());
+    }
+}

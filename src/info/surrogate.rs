@@ -1,0 +1,207 @@
+//! Surrogate series for the independence test: iAAFT for continuous series, circular shifts for
+//! discrete or binary ones (DESIGN.md §2.2).
+//!
+//! iAAFT (Schreiber and Schmitz 1996) alternates between imposing the original Fourier
+//! amplitudes and the original value distribution. The phases are taken with `atan2`, which
+//! is 0 on an exactly-zero bin, where `z/|z|` would give NaN. On a binary series the two
+//! constraints cannot be met together (the relative spectral error stays near 1), so binary
+//! dithers use circular shifts instead, which keep both exactly.
+//!
+//! End-point mismatch: the DFT treats the series as periodic, so a jump between the last and
+//! first samples leaks power into every frequency. The target amplitudes are therefore taken
+//! from the series minus the zero-mean ramp that joins its ends; the value distribution
+//! imposed is still exactly the original one.
+
+use std::sync::Arc;
+
+use rand::Rng;
+use rand::seq::SliceRandom;
+use rustfft::num_complex::Complex64;
+use rustfft::{Fft, FftPlanner};
+
+use super::InfoError;
+
+/// Options of the iAAFT iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IaaftOptions {
+    /// Stop when the relative spectral error ‖|S| − |X|‖ / ‖|X|‖ falls below this.
+    pub tolerance: f64,
+    /// Stop after this many iterations whatever the error.
+    pub max_iterations: usize,
+}
+
+impl Default for IaaftOptions {
+    fn default() -> Self {
+        Self { tolerance: 1e-3, max_iterations: 200 }
+    }
+}
+
+/// What one iAAFT run achieved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IaaftReport {
+    /// Iterations performed.
+    pub iterations: usize,
+    /// Final relative spectral error of the returned series against the target amplitudes.
+    pub spectral_error: f64,
+    /// True when the error fell below the tolerance or the ranks stopped changing.
+    pub converged: bool,
+}
+
+/// An iAAFT generator for one series: the FFT plans, sorted values and target amplitudes are
+/// computed once and shared by every surrogate (and across threads: the plans are `Sync`).
+#[derive(Clone)]
+pub struct Iaaft {
+    forward: Arc<dyn Fft<f64>>,
+    inverse: Arc<dyn Fft<f64>>,
+    sorted: Vec<f64>,
+    amplitudes: Vec<f64>,
+    amplitude_norm: f64,
+    opts: IaaftOptions,
+}
+
+impl Iaaft {
+    /// Prepares the generator for `x` (finite, at least 4 samples, not constant).
+    pub fn new(x: &[f64], opts: IaaftOptions) -> Result<Self, InfoError> {
+        super::validate::finite("x", x)?;
+        super::validate::not_constant("x", x)?;
+        if x.len() < 4 {
+            return Err(InfoError::TooFewSamples { what: "iAAFT surrogate".into(), n: x.len(), needed: 4 });
+        }
+        let n = x.len();
+        let mut planner = FftPlanner::new();
+        let forward = planner.plan_fft_forward(n);
+        let inverse = planner.plan_fft_inverse(n);
+        let jump = x[n - 1] - x[0];
+        let mut buf: Vec<Complex64> = x
+            .iter()
+            .enumerate()
+            .map(|(t, &v)| Complex64::new(v - jump * (t as f64 / (n - 1) as f64 - 0.5), 0.0))
+            .collect();
+        forward.process(&mut buf);
+        let amplitudes: Vec<f64> = buf.iter().map(|c| c.norm()).collect();
+        let amplitude_norm = amplitudes.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let mut sorted = x.to_vec();
+        sorted.sort_unstable_by(f64::total_cmp);
+        Ok(Self { forward, inverse, sorted, amplitudes, amplitude_norm, opts })
+    }
+
+    /// The target Fourier amplitudes (of the end-matched series).
+    pub fn target_amplitudes(&self) -> &[f64] {
+        &self.amplitudes
+    }
+
+    /// Relative spectral error of `s` against the target amplitudes.
+    pub fn spectral_error(&self, s: &[f64]) -> f64 {
+        let mut buf: Vec<Complex64> = s.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+        self.forward.process(&mut buf);
+        self.error_of(&buf)
+    }
+
+    fn error_of(&self, spectrum: &[Complex64]) -> f64 {
+        let e: f64 = spectrum.iter().zip(&self.amplitudes).map(|(c, a)| (c.norm() - a).powi(2)).sum();
+        e.sqrt() / self.amplitude_norm
+    }
+
+    /// One surrogate: same values as x (a permutation), approximately the same amplitudes.
+    pub fn generate(&self, rng: &mut impl Rng) -> (Vec<f64>, IaaftReport) {
+        let n = self.sorted.len();
+        let mut r = self.sorted.clone();
+        r.shuffle(rng);
+        let mut buf = vec![Complex64::new(0.0, 0.0); n];
+        let mut scratch = vec![Complex64::new(0.0, 0.0); self.forward.get_inplace_scratch_len()];
+        let mut rank: Vec<u32> = (0..n as u32).collect();
+        let mut prev_rank: Vec<u32> = Vec::new();
+        let mut report = IaaftReport { iterations: 0, spectral_error: f64::INFINITY, converged: false };
+        for it in 1..=self.opts.max_iterations {
+            for (b, &v) in buf.iter_mut().zip(&r) {
+                *b = Complex64::new(v, 0.0);
+            }
+            self.forward.process_with_scratch(&mut buf, &mut scratch);
+            report.spectral_error = self.error_of(&buf);
+            report.iterations = it - 1;
+            if report.spectral_error <= self.opts.tolerance {
+                report.converged = true;
+                break;
+            }
+            for (b, &a) in buf.iter_mut().zip(&self.amplitudes) {
+                let phase = b.im.atan2(b.re);
+                *b = Complex64::from_polar(a, phase);
+            }
+            self.inverse.process_with_scratch(&mut buf, &mut scratch);
+            rank.sort_unstable_by(|&i, &j| buf[i as usize].re.total_cmp(&buf[j as usize].re));
+            for (pos, &i) in rank.iter().enumerate() {
+                r[i as usize] = self.sorted[pos];
+            }
+            if rank == prev_rank {
+                report.iterations = it;
+                report.spectral_error = self.spectral_error(&r);
+                report.converged = true;
+                break;
+            }
+            prev_rank.clone_from(&rank);
+            report.iterations = it;
+        }
+        if !report.converged {
+            report.spectral_error = self.spectral_error(&r);
+        }
+        (r, report)
+    }
+}
+
+/// Bounds for circular shifts used as surrogates of a series of length `n` analysed up to lag
+/// `max_lag` with embedding `width`: shifts within `min_shift` of 0 (mod n) could realign the
+/// dither with its own effect in the residual, so they are excluded.
+pub fn shift_bounds(n: usize, max_lag: usize, width: usize) -> Result<(usize, usize), InfoError> {
+    let lo = (2 * (max_lag + width)).max(n / 10).max(1);
+    if 2 * lo >= n {
+        return Err(InfoError::TooFewSamples {
+            what: format!("circular-shift surrogates up to lag {max_lag}"),
+            n,
+            needed: 2 * lo + 1,
+        });
+    }
+    Ok((lo, n - lo))
+}
+
+/// A random circular shift in `bounds` whose shifted series differs from `x` in more than 10 %
+/// of the samples: a periodic dither (a PRBS shorter than the record) shifted by a multiple of
+/// its period would otherwise reproduce itself and the original coupling.
+pub fn draw_shift(x: &[f64], bounds: (usize, usize), rng: &mut impl Rng) -> usize {
+    let n = x.len();
+    let mut best = (bounds.0, n);
+    for _ in 0..64 {
+        let s = rng.random_range(bounds.0..=bounds.1);
+        let same = (0..n).filter(|&t| x[(t + s) % n] == x[t]).count();
+        if same * 10 < n * 9 {
+            return s;
+        }
+        if same < best.1 {
+            best = (s, same);
+        }
+    }
+    best.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn shift_bounds_exclude_small_shifts() {
+        assert_eq!(shift_bounds(2047, 20, 1).unwrap(), (204, 1843));
+        assert!(shift_bounds(80, 20, 1).unwrap_err().to_string().contains("lag 20"));
+        assert_eq!(shift_bounds(100, 20, 1).unwrap(), (42, 58));
+    }
+
+    #[test]
+    fn periodic_series_avoids_period_multiples() {
+        let x: Vec<f64> = (0..1000).map(|t| if (t % 50) < 20 { 1.0 } else { -1.0 }).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        for _ in 0..200 {
+            let s = draw_shift(&x, (100, 900), &mut rng);
+            assert_ne!(s % 50, 0, "shift {s} reproduces the series");
+        }
+    }
+}
