@@ -61,11 +61,17 @@ pub struct MiOptions {
     /// In `Auto` mode, X is discrete when it has at most this many distinct values and at
     /// least 2(k + 1) samples per level on average. Default 16 (a multilevel PRBS has a few).
     pub max_levels: usize,
+    /// Divide continuous variables by their standard deviation before the KSG1 search, as
+    /// scikit-learn's `mutual_info_regression` does. The max-norm joint neighbourhood depends
+    /// on the relative scale of X and Y at finite N, and a dither in % against a residual in
+    /// engineering units would otherwise bias the estimate. Default true. The discrete-X path
+    /// is scale-free and ignores this.
+    pub standardize: bool,
 }
 
 impl Default for MiOptions {
     fn default() -> Self {
-        Self { k: 4, x_kind: XKind::Auto, max_levels: 16 }
+        Self { k: 4, x_kind: XKind::Auto, max_levels: 16, standardize: true }
     }
 }
 
@@ -129,13 +135,36 @@ pub fn mutual_information(x: &[f64], y: &[f64], opts: &MiOptions) -> Result<MiEs
     validate::pair(x, y, opts.k)?;
     Ok(match opts.discrete_levels(x)? {
         Some(levels) => MiEstimate { nats: ross(&levels, y, opts.k), n: x.len(), estimator: Estimator::Ross },
-        None => MiEstimate { nats: ksg1(&[x], y, opts.k), n: x.len(), estimator: Estimator::Ksg1 },
+        None => {
+            let (xs, ys) = (scaled(x, opts.standardize), scaled(y, opts.standardize));
+            MiEstimate { nats: ksg1(&[&xs], &ys, opts.k), n: x.len(), estimator: Estimator::Ksg1 }
+        }
     })
 }
 
+/// `v` divided by its (population) standard deviation when `on`; `v` itself otherwise.
+pub(crate) fn scaled(v: &[f64], on: bool) -> std::borrow::Cow<'_, [f64]> {
+    if !on {
+        return std::borrow::Cow::Borrowed(v);
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / n).sqrt();
+    if sd > 0.0 {
+        std::borrow::Cow::Owned(v.iter().map(|a| a / sd).collect())
+    } else {
+        std::borrow::Cow::Borrowed(v)
+    }
+}
+
 /// KSG1 estimate in nats of I(X; Y) for a multivariate continuous X given as columns (at most
-/// 4), e.g. a dither at two consecutive lags.
-pub fn mutual_information_multi(x: &[&[f64]], y: &[f64], k: usize) -> Result<f64, InfoError> {
+/// 4), e.g. a dither at two consecutive lags. Columns are standardised when `standardize`.
+pub fn mutual_information_multi(
+    x: &[&[f64]],
+    y: &[f64],
+    k: usize,
+    standardize: bool,
+) -> Result<f64, InfoError> {
     if x.is_empty() || x.len() > MAX_X_DIM {
         return Err(InfoError::InvalidParameter {
             name: "x columns",
@@ -154,5 +183,7 @@ pub fn mutual_information_multi(x: &[&[f64]], y: &[f64], k: usize) -> Result<f64
     if x.iter().all(|c| validate::not_constant("x", c).is_err()) {
         return Err(InfoError::Constant { series: "x".into(), value: x[0][0] });
     }
-    Ok(ksg1(x, y, k))
+    let xs: Vec<_> = x.iter().map(|c| scaled(c, standardize)).collect();
+    let cols: Vec<&[f64]> = xs.iter().map(|c| c.as_ref()).collect();
+    Ok(ksg1(&cols, &scaled(y, standardize), k))
 }

@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use super::discrete::{Levels, ross_sorted};
-use super::estimator::{Estimator, MiOptions, mutual_information};
+use super::estimator::{Estimator, MiOptions, mutual_information, scaled};
 use super::ksg::ksg1;
 use super::{InfoError, validate};
 
@@ -95,7 +95,10 @@ enum Path {
 /// surrogates (circular shifts of x, or a replacement x) share the preparation.
 pub struct LaggedPair<'a> {
     x: &'a [f64],
-    y: &'a [f64],
+    /// y as the estimator sees it (standardised on the continuous path).
+    y: std::borrow::Cow<'a, [f64]>,
+    /// Standard deviation x is divided by on the continuous path (1 when not standardising).
+    x_scale: f64,
     lags: Lags,
     width: usize,
     k: usize,
@@ -142,7 +145,16 @@ impl<'a> LaggedPair<'a> {
             }
             None => Path::Continuous,
         };
-        Ok(Self { x, y, lags, width, k: opts.k, n_pairs, path })
+        let continuous = matches!(path, Path::Continuous);
+        let y = scaled(y, continuous && opts.standardize);
+        let x_scale = if continuous && opts.standardize {
+            let n = x.len() as f64;
+            let mean = x.iter().sum::<f64>() / n;
+            (x.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / n).sqrt()
+        } else {
+            1.0
+        };
+        Ok(Self { x, y, x_scale, lags, width, k: opts.k, n_pairs, path })
     }
 
     /// The dither series.
@@ -209,14 +221,15 @@ impl<'a> LaggedPair<'a> {
         }
     }
 
-    /// The profile with x replaced by `x_new` (an iAAFT surrogate), always by KSG1 since a
-    /// surrogate of a continuous series is continuous.
+    /// The profile with x replaced by `x_new` (an iAAFT surrogate, which has x's values and
+    /// hence its scale), always by KSG1 since a surrogate of a continuous series is continuous.
     pub fn profile_with_x(&self, x_new: &[f64]) -> Vec<f64> {
         debug_assert_eq!(x_new.len(), self.x.len());
         self.continuous_profile(x_new)
     }
 
     fn continuous_profile(&self, x: &[f64]) -> Vec<f64> {
+        let x: Vec<f64> = x.iter().map(|v| v / self.x_scale).collect();
         let t0 = self.width - 1;
         let np = self.n_pairs;
         let cols: Vec<&[f64]> = (0..self.width).map(|d| &x[t0 - d..t0 - d + np]).collect();
