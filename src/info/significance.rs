@@ -18,7 +18,7 @@ use serde::Serialize;
 use super::InfoError;
 use super::estimator::MiOptions;
 use super::lagged::{LaggedPair, LaggedProfile, Lags, norm_of};
-use super::surrogate::{Iaaft, IaaftOptions, draw_shift, shift_bounds};
+use super::surrogate::{Iaaft, IaaftOptions, draw_shift, end_matched_range, shift_bounds};
 
 /// How surrogates of the dither are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -104,9 +104,14 @@ pub struct LaggedTest {
     pub seed: u64,
     /// The largest iAAFT spectral error among the surrogates (iAAFT only).
     pub worst_spectral_error: Option<f64>,
+    /// The sample range analysed (the whole record unless iAAFT end matching trimmed it).
+    pub analysed: std::ops::Range<usize>,
 }
 
 /// Lagged MI profile of (x, y), its norm, and their surrogate thresholds.
+///
+/// When the surrogates are iAAFT, both series are first cut to the end-matched range of x
+/// ([`end_matched_range`], at most a tenth trimmed) and `analysed` says which range that was.
 pub fn lagged_test(
     x: &[f64],
     y: &[f64],
@@ -116,7 +121,18 @@ pub fn lagged_test(
     sur: &SurrogateOptions,
 ) -> Result<LaggedTest, InfoError> {
     let pair = LaggedPair::new(x, y, lags, width, mi)?;
-    test_prepared(&pair, sur)
+    let iaaft = match sur.method {
+        SurrogateMethod::Auto => !pair.is_discrete(),
+        m => m == SurrogateMethod::Iaaft,
+    };
+    if !iaaft {
+        return test_prepared(&pair, sur);
+    }
+    let range = end_matched_range(x, 0.1);
+    let pair = LaggedPair::new(&x[range.clone()], &y[range.clone()], lags, width, mi)?;
+    let mut test = test_prepared(&pair, sur)?;
+    test.analysed = range;
+    Ok(test)
 }
 
 /// [`lagged_test`] on an already prepared pair.
@@ -194,6 +210,7 @@ pub fn test_prepared(pair: &LaggedPair<'_>, sur: &SurrogateOptions) -> Result<La
         method,
         seed: sur.seed,
         worst_spectral_error: worst,
+        analysed: 0..pair.len(),
         profile,
     })
 }
