@@ -1,1 +1,4 @@
 //! One module per command-line verb; each parses its own arguments and calls the library.
+
+pub mod bench;
+pub mod mi;

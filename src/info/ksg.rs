@@ -13,7 +13,12 @@
 
 use std::num::NonZero;
 
-use kiddo::{Chebyshev, ImmutableKdTree};
+use kiddo::Chebyshev;
+/// The immutable kd-tree (kiddo's `ImmutableKdTree` layout) with leaves of 8 points instead
+/// of 32: a KSG query wants only k + 1 ≈ 5 neighbours, and smaller leaves cut the candidates
+/// scanned per query (measured at N = 2048, k = 4: 0.89 ms per estimate against 1.07 ms).
+type Tree<const D: usize> =
+    kiddo::KdTree<f64, u32, kiddo::Eytzinger, kiddo::VecOfArenas<f64, u32, D, 8>, D, 8>;
 
 use super::digamma::digamma;
 use super::marginal::SortedMarginal;
@@ -26,14 +31,20 @@ struct JointNeighbours {
 }
 
 fn joint_neighbours<const D: usize>(points: &[[f64; D]], k: usize) -> JointNeighbours {
-    let tree: ImmutableKdTree<f64, D> =
-        ImmutableKdTree::new_from_slice(points).expect("finite points build a tree");
+    let tree: Tree<D> = Tree::<D>::new_from_slice(points).expect("finite points build a tree");
     let kq = NonZero::new(k + 1).expect("k + 1 > 0");
+    let mut scratch = tree.create_scratch::<Chebyshev<f64>>();
     let mut radius = Vec::with_capacity(points.len());
     let mut k_eff = Vec::with_capacity(points.len());
     for p in points {
-        let found = tree.query(p).nearest_n::<Chebyshev<f64>>(kq).execute();
-        let r = found[k].distance;
+        let found = tree
+            .query(p)
+            .nearest_n::<Chebyshev<f64>>(kq)
+            .unsorted()
+            .without_items()
+            .with_scratch(&mut scratch)
+            .execute();
+        let r = found.iter().map(|f| f.distance).fold(0.0, f64::max);
         if r > 0.0 {
             radius.push(r);
             k_eff.push(k);
@@ -46,15 +57,19 @@ fn joint_neighbours<const D: usize>(points: &[[f64; D]], k: usize) -> JointNeigh
     JointNeighbours { radius, k_eff }
 }
 
-/// Number of other samples within `r` of sample `i` in a 1-D marginal: strictly closer for
-/// r > 0, at distance 0 for a tie point (r = 0).
-fn marginal_count(m: &SortedMarginal, c: f64, r: f64) -> usize {
-    if r > 0.0 { m.count_strictly_within(c, r) - 1 } else { m.count_within(c, 0.0) - 1 }
+/// Number of other samples within `r` of sample `i` (value `c`) in a 1-D marginal: strictly
+/// closer for r > 0, at distance 0 for a tie point (r = 0).
+fn marginal_count(m: &SortedMarginal, i: usize, c: f64, r: f64) -> usize {
+    if r > 0.0 { m.count_strictly_within_sample(i, r) - 1 } else { m.count_within(c, 0.0) - 1 }
+}
+
+fn marginal_counts(v: &[f64], radius: &[f64]) -> Vec<usize> {
+    let m = SortedMarginal::new(v);
+    v.iter().zip(radius).enumerate().map(|(i, (&c, &r))| marginal_count(&m, i, c, r)).collect()
 }
 
 fn kd_marginal_counts<const D: usize>(points: &[[f64; D]], radius: &[f64]) -> Vec<usize> {
-    let tree: ImmutableKdTree<f64, D> =
-        ImmutableKdTree::new_from_slice(points).expect("finite points build a tree");
+    let tree: Tree<D> = Tree::<D>::new_from_slice(points).expect("finite points build a tree");
     points
         .iter()
         .zip(radius)
@@ -77,10 +92,8 @@ fn combine(n: usize, k_eff: &[usize], nx: &[usize], ny: &[usize]) -> f64 {
 fn ksg_1d(x: &[f64], y: &[f64], k: usize) -> f64 {
     let points: Vec<[f64; 2]> = x.iter().zip(y).map(|(&a, &b)| [a, b]).collect();
     let jn = joint_neighbours(&points, k);
-    let mx = SortedMarginal::new(x);
-    let my = SortedMarginal::new(y);
-    let nx: Vec<usize> = x.iter().zip(&jn.radius).map(|(&c, &r)| marginal_count(&mx, c, r)).collect();
-    let ny: Vec<usize> = y.iter().zip(&jn.radius).map(|(&c, &r)| marginal_count(&my, c, r)).collect();
+    let nx = marginal_counts(x, &jn.radius);
+    let ny = marginal_counts(y, &jn.radius);
     combine(x.len(), &jn.k_eff, &nx, &ny)
 }
 
@@ -91,8 +104,7 @@ fn ksg_nd<const DX: usize, const D: usize>(x: &[&[f64]], y: &[f64], k: usize) ->
         (0..n).map(|t| std::array::from_fn(|d| if d < DX { xp[t][d] } else { y[t] })).collect();
     let jn = joint_neighbours(&points, k);
     let nx = kd_marginal_counts(&xp, &jn.radius);
-    let my = SortedMarginal::new(y);
-    let ny: Vec<usize> = y.iter().zip(&jn.radius).map(|(&c, &r)| marginal_count(&my, c, r)).collect();
+    let ny = marginal_counts(y, &jn.radius);
     combine(n, &jn.k_eff, &nx, &ny)
 }
 

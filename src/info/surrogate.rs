@@ -2,8 +2,8 @@
 //! discrete or binary ones (DESIGN.md §2.2).
 //!
 //! iAAFT (Schreiber and Schmitz 1996) alternates between imposing the original Fourier
-//! amplitudes and the original value distribution. The phases are taken with `atan2`, which
-//! is 0 on an exactly-zero bin, where `z/|z|` would give NaN. On a binary series the two
+//! amplitudes and the original value distribution. The phases follow `atan2`'s convention,
+//! which is 0 on an exactly-zero bin, where `z/|z|` would give NaN. On a binary series the two
 //! constraints cannot be met together (the relative spectral error stays near 1), so binary
 //! dithers use circular shifts instead, which keep both exactly.
 //!
@@ -34,8 +34,12 @@ pub struct IaaftOptions {
 }
 
 impl Default for IaaftOptions {
+    /// Tolerance 0.5 %, at most 100 iterations. On Gaussian AR(1) series of 2048 samples the
+    /// error falls to 0.5 % within about 6 iterations and then creeps to a fixed point at
+    /// 0.17–0.2 % over another 30 or more (measured with a numpy iAAFT): the tail costs five
+    /// times the work for a spectrum that is already matched to half a per cent.
     fn default() -> Self {
-        Self { tolerance: 1e-3, max_iterations: 200 }
+        Self { tolerance: 5e-3, max_iterations: 100 }
     }
 }
 
@@ -108,6 +112,7 @@ impl Iaaft {
         let mut buf = vec![Complex64::new(0.0, 0.0); n];
         let mut scratch = vec![Complex64::new(0.0, 0.0); self.forward.get_inplace_scratch_len()];
         let mut rank: Vec<u32> = (0..n as u32).collect();
+        let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(n);
         let mut prev_rank: Vec<u32> = Vec::new();
         let mut report = IaaftReport { iterations: 0, spectral_error: f64::INFINITY, converged: false };
         for it in 1..=self.opts.max_iterations {
@@ -122,12 +127,14 @@ impl Iaaft {
                 break;
             }
             for (b, &a) in buf.iter_mut().zip(&self.amplitudes) {
-                let phase = b.im.atan2(b.re);
-                *b = Complex64::from_polar(a, phase);
+                *b = with_phase_of(*b, a);
             }
             self.inverse.process_with_scratch(&mut buf, &mut scratch);
-            rank.sort_unstable_by(|&i, &j| buf[i as usize].re.total_cmp(&buf[j as usize].re));
-            for (pos, &i) in rank.iter().enumerate() {
+            keyed.clear();
+            keyed.extend(buf.iter().enumerate().map(|(i, c)| (order_key(c.re), i as u32)));
+            keyed.sort_unstable();
+            for (pos, &(_, i)) in keyed.iter().enumerate() {
+                rank[pos] = i;
                 r[i as usize] = self.sorted[pos];
             }
             if rank == prev_rank {
@@ -144,6 +151,21 @@ impl Iaaft {
         }
         (r, report)
     }
+}
+
+/// `a·e^{iφ}` with φ the phase of `z`, computed as `a·z/|z|`: the same number as
+/// `from_polar(a, atan2(im, re))` without two transcendental calls per bin, and with atan2's
+/// convention φ = 0 on an exactly-zero bin, where a bare `z/|z|` would be NaN.
+fn with_phase_of(z: Complex64, a: f64) -> Complex64 {
+    let m = z.norm();
+    if m > 0.0 { z * (a / m) } else { Complex64::new(a, 0.0) }
+}
+
+/// A `u64` whose unsigned order is the numeric order of finite `f64`s, so ranking can sort
+/// integer keys instead of calling a float comparator.
+fn order_key(v: f64) -> u64 {
+    let b = v.to_bits();
+    if b >> 63 == 1 { !b } else { b | (1 << 63) }
 }
 
 /// The end-point mismatch of `x[range]` as a fraction of its total variation: the squared
@@ -217,6 +239,28 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn order_key_sorts_like_floats() {
+        let mut v = [3.5, -0.0, 0.0, -1e300, 1e-300, -2.0, 7.0, -1e-300];
+        let mut k: Vec<(u64, f64)> = v.iter().map(|&x| (order_key(x), x)).collect();
+        k.sort_by_key(|p| p.0);
+        v.sort_by(f64::total_cmp);
+        assert_eq!(
+            k.iter().map(|p| p.1.to_bits()).collect::<Vec<_>>(),
+            v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn phase_factor_matches_atan2_and_is_zero_safe() {
+        for z in [Complex64::new(3.0, -4.0), Complex64::new(-1e-200, 2e-200), Complex64::new(-2.0, 0.0)] {
+            let want = Complex64::from_polar(2.5, z.im.atan2(z.re));
+            let got = with_phase_of(z, 2.5);
+            assert!((got - want).norm() < 1e-14, "{z}: {got} vs {want}");
+        }
+        assert_eq!(with_phase_of(Complex64::new(0.0, 0.0), 2.5), Complex64::new(2.5, 0.0));
+    }
 
     #[test]
     fn end_matching_finds_the_matched_segment() {

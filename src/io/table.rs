@@ -104,7 +104,7 @@ impl Table {
         if values.len() != self.time.len() {
             return Err(TableError::LengthMismatch { name, expected: self.time.len(), found: values.len() });
         }
-        if self.names.iter().any(|n| *n == name) {
+        if self.names.contains(&name) {
             return Err(TableError::DuplicateColumn(name));
         }
         self.names.push(name);
