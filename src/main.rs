@@ -19,8 +19,24 @@ struct Cli {
 #[derive(clap::Subcommand)]
 enum Verb {
     /// One MI estimate between two CSV columns, optionally with its surrogate threshold.
+    ///
+    /// Estimates I(x(t); y(t+L)). The file's first column is `time`; --x and --y name two
+    /// other columns. A positive lag pairs x with later y (a dither against the future
+    /// residual, as in the paper). The estimator is KSG algorithm 1 for a continuous x and its
+    /// discrete-x form (Ross 2014) when x has few levels, as a PRBS dither does. With
+    /// --surrogates M, the estimate is tested against M surrogates (circular shifts of a
+    /// discrete x, iAAFT of a continuous one) and the critical value mean + z·sd is printed.
+    ///
+    /// Example: mpmwatch mi run.csv --x ud1 --y e1 --lag 2 --units bits --surrogates 100
     Mi(cmd::mi::Args),
     /// Timings of the estimation core (run with --release).
+    ///
+    /// Reports the median time of one binary-dither estimate and one continuous KSG estimate
+    /// at length N (k = 4), of one iAAFT surrogate, and the wall time of a full 3×3
+    /// norm-of-MI matrix (binary dithers, lags 1..=20, 100 surrogates per element, all
+    /// threads), on seeded synthetic data. A debug build is about ten times slower.
+    ///
+    /// Example: cargo run --release -- bench --n 2048 --json
     Bench(cmd::bench::Args),
 }
 

@@ -2,12 +2,7 @@
 
 use mpmwatch::benchmark::{self, BenchOptions};
 
-/// Time the estimation core on seeded synthetic data.
-///
-/// Reports the median time of one binary-dither estimate and one continuous KSG estimate at
-/// length N (k = 4), one iAAFT surrogate, and the wall time of a full 3×3 norm-of-MI matrix
-/// (binary dithers, lags 1..=20, 100 surrogates per element, all threads). Run it with
-/// `--release`: a debug build is ten times slower.
+/// Arguments of the verb (documented on the verb in `main.rs`).
 #[derive(clap::Args)]
 pub struct Args {
     /// Record length N.

@@ -8,15 +8,7 @@ use mpmwatch::info::{Lags, MiOptions, SurrogateOptions, Units, XKind, lagged_tes
 use mpmwatch::io::Table;
 use serde_json::json;
 
-/// Estimate I(x(t); y(t+L)) between two columns of a CSV file.
-///
-/// The file's first column is `time`; --x and --y name two other columns. A positive lag pairs
-/// x with later y (a dither against the future residual, as in the paper). The estimator is
-/// KSG algorithm 1 for continuous x and Ross's discrete-x form when x has few levels (a PRBS
-/// dither). With --surrogates M, x is also tested against M surrogates (circular shifts of a
-/// discrete x, iAAFT of a continuous one) and the critical value mean + z·sd is printed.
-///
-/// Example: mpmwatch mi run.csv --x ud1 --y e1 --lag 2 --units bits --surrogates 100
+/// Arguments of the verb (documented on the verb in `main.rs`).
 #[derive(clap::Args)]
 pub struct Args {
     /// CSV file with a `time` column.
