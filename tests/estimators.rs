@@ -2,7 +2,7 @@
 
 mod common;
 
-use mpmwatch::info::{Estimator, InfoError, MiOptions, XKind, mutual_information};
+use mpmwatch::info::{Estimator, InfoError, MiOptions, XKind, auto_tmax, mutual_information};
 use serde::Deserialize;
 
 #[derive(Deserialize)]
@@ -239,4 +239,22 @@ fn bad_input_is_an_error_naming_the_problem() {
     assert!(e.to_string().contains("10") && e.to_string().contains("9"), "{e}");
     let forced = MiOptions { x_kind: XKind::Discrete, max_levels: 4, ..opts };
     assert!(matches!(mutual_information(&good, &good, &forced), Err(InfoError::TooManyLevels { .. })));
+}
+
+/// Automatic tmax on the paper's ARIMA(2,0,0) disturbance (eq 14), d = e / (1 − 1.6q⁻¹ + 0.8q⁻²).
+/// For a Gaussian process I(τ) = −½ ln(1 − ρ(τ)²) with ρ from the Yule–Walker recursion
+/// ρ(τ) = 1.6ρ(τ−1) − 0.8ρ(τ−2): 0.78, 0.25, 0.042, 0.001, 0.046 nats at lags 1..5, so the
+/// first minimum is at lag 4, separated from its neighbours by about 4 standard deviations of
+/// a KSG estimate at N = 2047.
+#[test]
+fn automatic_tmax_is_the_first_minimum_of_the_auto_mi() {
+    let mut rng = common::rng(31);
+    let e = common::normal(&mut rng, 2247);
+    let mut d = vec![0.0; e.len()];
+    for t in 2..e.len() {
+        d[t] = 1.6 * d[t - 1] - 0.8 * d[t - 2] + 0.1 * e[t];
+    }
+    let d = &d[200..];
+    assert_eq!(auto_tmax(d, 20, 4).unwrap(), 4);
+    assert!(auto_tmax(d, 1, 4).is_err());
 }
