@@ -4,7 +4,9 @@
 //! Run: `cargo bench --bench estimators`.
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
-use mpmwatch::info::{Iaaft, IaaftOptions, Lags, MiOptions, SurrogateOptions, lagged_test, mutual_information};
+use mpmwatch::info::{
+    Iaaft, IaaftOptions, Lags, MiOptions, SurrogateOptions, lagged_test, mutual_information,
+};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
