@@ -15,6 +15,7 @@
 //! * [`benchmark`]: timings of the core behind `mpmwatch bench`.
 
 pub mod benchmark;
+pub mod detect;
 pub mod info;
 pub mod io;
 pub mod model;

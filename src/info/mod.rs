@@ -16,7 +16,7 @@ pub mod marginal;
 pub mod normalized;
 pub mod significance;
 pub mod surrogate;
-pub(crate) mod validate;
+pub mod validate;
 
 pub use digamma::digamma;
 pub use error::InfoError;

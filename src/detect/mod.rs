@@ -1,0 +1,10 @@
+//! Detection and localisation: the lagged MI matrix between dithers and residuals (eqs 20–21),
+//! each element with its own surrogate critical value, and the verdict per MV→CV channel from
+//! Propositions 1–4 of the paper. Pure and synchronous; the online service and the `analyze`
+//! verb both call [`analyze`].
+
+mod matrix;
+mod verdict;
+
+pub use matrix::{CcfBaseline, Cell, ElementTest, LagChoice, MatrixOptions, MatrixResult, Signal, analyze};
+pub use verdict::{Channel, Verdict, localise};
