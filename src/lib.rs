@@ -19,4 +19,5 @@ pub mod detect;
 pub mod info;
 pub mod io;
 pub mod model;
+pub mod report;
 pub mod sim;

@@ -120,3 +120,69 @@ fn bench_json_has_the_contract_keys() {
     }
     assert_eq!(out["n"], 512);
 }
+
+#[test]
+fn analyze_prints_json_verdicts_and_writes_figures() {
+    let dir = scratch_dir("analyze");
+    let file = write_record(&dir);
+    let figs = dir.join("figs");
+    let out = json_of(
+        &bin()
+            .args(["analyze"])
+            .arg(&file)
+            .args(["--dither", "ud1", "--residual", "e1,e2", "--tmax", "5", "--surrogates", "30", "--json"])
+            .arg("--figures")
+            .arg(&figs)
+            .output()
+            .unwrap(),
+    );
+    assert_eq!(out["mismatch"], true);
+    let ch = out["channels"].as_array().unwrap();
+    assert_eq!(ch.len(), 2);
+    assert_eq!(ch[0]["input"], "ud1");
+    assert_eq!(ch[0]["output"], "e1");
+    assert_eq!(ch[0]["verdict"], "mismatch");
+    assert_eq!(ch[1]["verdict"], "clean");
+    assert!(
+        ch[0]["norm_mi_bits"].as_f64().unwrap() > ch[0]["threshold_bits"].as_f64().unwrap()
+            || ch[0]["peak_lag"] == 1
+    );
+    for name in ["mi_lags", "ccf_lags", "mi_matrix"] {
+        for ext in ["svg", "png"] {
+            let f = figs.join(format!("{name}.{ext}"));
+            let len = std::fs::metadata(&f).unwrap_or_else(|_| panic!("{} missing", f.display())).len();
+            assert!(len > 1000, "{} is only {len} bytes", f.display());
+        }
+    }
+    // Residuals as outputs minus a simulation: a zero simulation gives the same matrix.
+    let sim = dir.join("sim.csv");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let mut sim_text = String::from("time,e1,e2\n");
+    for line in text.lines().skip(1) {
+        let t = line.split(',').next().unwrap();
+        sim_text.push_str(&format!("{t},0,0\n"));
+    }
+    std::fs::write(&sim, sim_text).unwrap();
+    let via_sim = json_of(
+        &bin()
+            .args(["analyze"])
+            .arg(&file)
+            .args([
+                "--dither",
+                "ud1",
+                "--output",
+                "e1,e2",
+                "--tmax",
+                "5",
+                "--surrogates",
+                "30",
+                "--json",
+                "--simulated",
+            ])
+            .arg(&sim)
+            .output()
+            .unwrap(),
+    );
+    assert_eq!(via_sim["channels"][0]["norm_mi_bits"], out["channels"][0]["norm_mi_bits"]);
+    assert_eq!(via_sim["channels"][0]["output"], "e_e1");
+}

@@ -1,4 +1,5 @@
 //! One module per command-line verb; each parses its own arguments and calls the library.
 
+pub mod analyze;
 pub mod bench;
 pub mod mi;

@@ -1,0 +1,278 @@
+//! Figures of an analysis, each written as SVG and PNG:
+//!
+//! * `mi_lags`: MI against lag for every dither × residual pair, with the per-lag surrogate
+//!   critical value (the paper's Figures 3, 8, 10, 16), one panel per pair;
+//! * `ccf_lags`: the cross-correlation against lag with its ±z/√N limits (Figures 2, 9, 11, 17);
+//! * `mi_matrix`: the MI matrix as a heat map, each cell shaded by norm / critical value and
+//!   labelled with the norm in bits and the verdict.
+//!
+//! PNG text is drawn with DejaVu Sans embedded in the binary, so no system font is needed.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+use crate::detect::{Cell, MatrixResult, Verdict};
+use crate::info::Units;
+
+/// Why a figure could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum FigureError {
+    /// The output folder could not be created.
+    #[error("cannot create {path}: {source}")]
+    Dir {
+        /// The folder.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// Drawing or encoding failed.
+    #[error("cannot draw {path}: {message}")]
+    Draw {
+        /// The file.
+        path: PathBuf,
+        /// What the backend said.
+        message: String,
+    },
+}
+
+const FONT: &str = "sans-serif";
+
+fn ensure_font() {
+    static ONCE: OnceLock<()> = OnceLock::new();
+    ONCE.get_or_init(|| {
+        // The bytes are a valid TTF shipped by the `dejavu` crate; failure would be a build defect.
+        plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular())
+            .unwrap_or_else(|_| panic!("embedded DejaVu Sans is not a valid font"));
+    });
+}
+
+fn draw_err(path: &Path, e: impl std::fmt::Debug) -> FigureError {
+    FigureError::Draw { path: path.to_path_buf(), message: format!("{e:?}") }
+}
+
+/// Renders one figure to `dir/name.svg` and `dir/name.png` with the same drawing function.
+macro_rules! svg_and_png {
+    ($dir:expr, $name:expr, $size:expr, $draw:expr) => {{
+        let svg = $dir.join(format!("{}.svg", $name));
+        {
+            let root = SVGBackend::new(&svg, $size).into_drawing_area();
+            $draw(&root).map_err(|e| draw_err(&svg, e))?;
+            root.present().map_err(|e| draw_err(&svg, e))?;
+        }
+        let png = $dir.join(format!("{}.png", $name));
+        {
+            let root = BitMapBackend::new(&png, $size).into_drawing_area();
+            $draw(&root).map_err(|e| draw_err(&png, e))?;
+            root.present().map_err(|e| draw_err(&png, e))?;
+        }
+        Ok::<[PathBuf; 2], FigureError>([svg, png])
+    }};
+}
+
+type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+/// Writes the three figures of a matrix into `dir` (created if missing) and returns the files.
+pub fn write_matrix_figures(dir: &Path, m: &MatrixResult, units: Units) -> Result<Vec<PathBuf>, FigureError> {
+    ensure_font();
+    std::fs::create_dir_all(dir).map_err(|source| FigureError::Dir { path: dir.to_path_buf(), source })?;
+    let rows = m.residuals.len() as u32;
+    let cols = m.dithers.len() as u32;
+    let panel = ((cols * 300 + 20).max(640), rows * 220 + 40);
+    let mut files = Vec::new();
+    files.extend(svg_and_png!(dir, "mi_lags", panel, |root| draw_grid(root, m, units, Panel::Mi))?);
+    files.extend(svg_and_png!(dir, "ccf_lags", panel, |root| draw_grid(root, m, units, Panel::Ccf))?);
+    let heat = ((cols * 150 + 160).max(520), rows * 90 + 100);
+    files.extend(svg_and_png!(dir, "mi_matrix", heat, |root| draw_heatmap(root, m, units))?);
+    Ok(files)
+}
+
+#[derive(Clone, Copy)]
+enum Panel {
+    Mi,
+    Ccf,
+}
+
+fn draw_grid<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    m: &MatrixResult,
+    units: Units,
+    what: Panel,
+) -> DrawResult<DB> {
+    root.fill(&WHITE)?;
+    let title = match what {
+        Panel::Mi => {
+            format!("MI against lag, surrogate critical value (z = {}, {} surrogates)", m.z, m.surrogates)
+        }
+        Panel::Ccf => "Cross-correlation against lag, 95 % limits".to_string(),
+    };
+    let (top, body) = root.split_vertically(30);
+    top.draw(&Text::new(title, (10, 8), (FONT, 16).into_font()))?;
+    let panels = body.split_evenly((m.residuals.len(), m.dithers.len()));
+    for (k, area) in panels.iter().enumerate() {
+        let (j, i) = (k / m.dithers.len(), k % m.dithers.len());
+        match m.cell(i, j) {
+            Some(c) => match what {
+                Panel::Mi => draw_mi_panel(area, c, &m.dithers[i], &m.residuals[j], units)?,
+                Panel::Ccf => draw_ccf_panel(area, c, &m.dithers[i], &m.residuals[j])?,
+            },
+            None => {
+                area.draw(&Text::new(
+                    format!("{} not excited", m.dithers[i]),
+                    (20, 40),
+                    (FONT, 13).into_font(),
+                ))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let pad = ((hi - lo) * 0.08).max(1e-6);
+    (lo - pad, hi + pad)
+}
+
+fn draw_mi_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    c: &Cell,
+    mv: &str,
+    cv: &str,
+    units: Units,
+) -> DrawResult<DB> {
+    let t = &c.pairwise;
+    let u = |v: f64| units.from_nats(v);
+    let (y0, y1) = bounds(t.profile.iter().chain(&t.lag_critical).map(|&v| u(v)).chain([0.0]));
+    let (x0, x1) = (*t.lags.first().unwrap_or(&0) as f64 - 0.5, *t.lags.last().unwrap_or(&1) as f64 + 0.5);
+    let colour = if c.significant { RED } else { BLUE };
+    let mut chart = ChartBuilder::on(area)
+        .caption(format!("{mv} → {cv}"), (FONT, 13))
+        .margin(6)
+        .x_label_area_size(32)
+        .y_label_area_size(48)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    let unit = if units == Units::Bits { "bits" } else { "nats" };
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("lag")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc(format!("MI ({unit})"))
+        .label_style((FONT, 10))
+        .axis_desc_style((FONT, 11))
+        .draw()?;
+    chart.draw_series(LineSeries::new(
+        t.lags.iter().zip(&t.lag_critical).map(|(&l, &v)| (l as f64, u(v))),
+        BLACK.stroke_width(1),
+    ))?;
+    chart.draw_series(LineSeries::new(
+        t.lags.iter().zip(&t.profile).map(|(&l, &v)| (l as f64, u(v))),
+        colour,
+    ))?;
+    chart.draw_series(
+        t.lags.iter().zip(&t.profile).map(|(&l, &v)| Circle::new((l as f64, u(v)), 3, colour.filled())),
+    )?;
+    Ok(())
+}
+
+fn draw_ccf_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    c: &Cell,
+    mv: &str,
+    cv: &str,
+) -> DrawResult<DB> {
+    let b = &c.ccf;
+    let reach = b.values.iter().fold(b.limit, |a, v| a.max(v.abs())) * 1.15;
+    let (x0, x1) = (*b.lags.first().unwrap_or(&0) as f64 - 0.5, *b.lags.last().unwrap_or(&1) as f64 + 0.5);
+    let colour = if b.significant { RED } else { BLUE };
+    let mut chart = ChartBuilder::on(area)
+        .caption(format!("{mv} → {cv}"), (FONT, 13))
+        .margin(6)
+        .x_label_area_size(32)
+        .y_label_area_size(48)
+        .build_cartesian_2d(x0..x1, -reach..reach)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("lag")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("CCF")
+        .label_style((FONT, 10))
+        .axis_desc_style((FONT, 11))
+        .draw()?;
+    for lim in [b.limit, -b.limit] {
+        chart.draw_series(LineSeries::new([(x0, lim), (x1, lim)], BLACK.stroke_width(1)))?;
+    }
+    for (&l, &v) in b.lags.iter().zip(&b.values) {
+        chart.draw_series(LineSeries::new([(l as f64, 0.0), (l as f64, v)], colour))?;
+    }
+    chart.draw_series(
+        b.lags.iter().zip(&b.values).map(|(&l, &v)| Circle::new((l as f64, v), 3, colour.filled())),
+    )?;
+    Ok(())
+}
+
+fn draw_heatmap<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    m: &MatrixResult,
+    units: Units,
+) -> DrawResult<DB> {
+    root.fill(&WHITE)?;
+    let unit = if units == Units::Bits { "bits" } else { "nats" };
+    root.draw(&Text::new(
+        format!("MI matrix: norm of MI ({unit}) / critical value; zero below it"),
+        (10, 8),
+        (FONT, 14).into_font(),
+    ))?;
+    let (left, top, w, h) = (120i32, 70i32, 150i32, 90i32);
+    for (i, name) in m.dithers.iter().enumerate() {
+        root.draw(&Text::new(name.clone(), (left + i as i32 * w + 10, top - 22), (FONT, 13).into_font()))?;
+    }
+    for (j, name) in m.residuals.iter().enumerate() {
+        root.draw(&Text::new(name.clone(), (10, top + j as i32 * h + h / 2 - 6), (FONT, 13).into_font()))?;
+        for i in 0..m.dithers.len() {
+            let (x, y) = (left + i as i32 * w, top + j as i32 * h);
+            let cell = m.cell(i, j);
+            let ratio = cell.map_or(0.0, |c| (c.pairwise.norm / c.pairwise.threshold.critical).max(0.0));
+            let fill = match cell {
+                None => RGBColor(220, 220, 220),
+                Some(c) if c.significant => {
+                    let s = ((ratio - 1.0) / 4.0).clamp(0.0, 1.0);
+                    RGBColor(255, (200.0 - 150.0 * s) as u8, (160.0 - 140.0 * s) as u8)
+                }
+                Some(_) => RGBColor(255, 255, (255.0 - 60.0 * ratio.min(1.0)) as u8),
+            };
+            root.draw(&Rectangle::new([(x, y), (x + w - 4, y + h - 4)], fill.filled()))?;
+            root.draw(&Rectangle::new([(x, y), (x + w - 4, y + h - 4)], RGBColor(160, 160, 160)))?;
+            let lines = match cell {
+                None => vec!["not excited".to_string()],
+                Some(c) => {
+                    let verdict =
+                        m.channels.iter().find(|ch| ch.mv_index == i && ch.cv_index == j).map_or("", |ch| {
+                            match ch.verdict {
+                                Verdict::Mismatch => "MISMATCH",
+                                Verdict::Clean => "clean",
+                                Verdict::ImplicatedByFeedback => "via feedback",
+                            }
+                        });
+                    vec![
+                        format!(
+                            "{:.4} / {:.4}",
+                            units.from_nats(c.pairwise.norm),
+                            units.from_nats(c.pairwise.threshold.critical)
+                        ),
+                        verdict.to_string(),
+                    ]
+                }
+            };
+            for (k, line) in lines.iter().enumerate() {
+                root.draw(&Text::new(line.clone(), (x + 8, y + 20 + 22 * k as i32), (FONT, 12).into_font()))?;
+            }
+        }
+    }
+    Ok(())
+}

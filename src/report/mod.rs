@@ -1,0 +1,7 @@
+//! Reports: figures (SVG and PNG through plotters) and the JSON summary of an analysis.
+//! Everything here writes files; the numbers come from `detect/` and `info/`.
+
+pub mod figures;
+mod summary;
+
+pub use summary::{ChannelSummary, summarise};
