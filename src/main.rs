@@ -13,9 +13,14 @@ struct Cli {
 }
 
 #[derive(clap::Subcommand)]
-enum Verb {}
+enum Verb {
+    /// Simulate one of the paper's plants and write its CSV (see `simulate --help`).
+    Simulate(cmd::simulate::Args),
+}
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    match cli.verb {}
+    match cli.verb {
+        Verb::Simulate(args) => cmd::simulate::run(args),
+    }
 }

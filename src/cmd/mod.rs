@@ -1,1 +1,3 @@
 //! One module per command-line verb; each parses its own arguments and calls the library.
+
+pub mod simulate;

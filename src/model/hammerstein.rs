@@ -49,14 +49,14 @@ impl StaticMap {
 
     /// Rejects a polynomial with no or non-finite coefficients.
     pub fn validate(&self) -> Result<(), ModelError> {
-        if let Self::Polynomial(c) = self {
-            if c.is_empty() || c.iter().any(|v| !v.is_finite()) {
-                return Err(ModelError::BadMap(format!(
+        match self {
+            Self::Polynomial(c) if c.is_empty() || c.iter().any(|v| !v.is_finite()) => {
+                Err(ModelError::BadMap(format!(
                     "polynomial coefficients {c:?} must be finite and non-empty"
-                )));
+                )))
             }
+            _ => Ok(()),
         }
-        Ok(())
     }
 }
 

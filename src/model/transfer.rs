@@ -137,7 +137,7 @@ pub(crate) fn is_schur(a: &[f64]) -> bool {
     while c.len() > 1 {
         let n = c.len() - 1;
         let k = c[n] / c[0];
-        if !(k.abs() < 1.0) {
+        if k.abs() >= 1.0 || k.is_nan() {
             return false;
         }
         let den = 1.0 - k * k;
