@@ -66,6 +66,11 @@ impl Lfsr {
         Ok(Self { order, state })
     }
 
+    /// The current register contents.
+    pub fn state(&self) -> u32 {
+        self.state
+    }
+
     /// The period of the bit sequence, 2^n − 1.
     pub fn period(&self) -> usize {
         (1usize << self.order) - 1
