@@ -123,3 +123,31 @@ fn excitations_have_the_requested_variance() {
     levels.dedup();
     assert_eq!(levels.len(), 5);
 }
+
+#[test]
+fn mimo_prbs_dithers_are_far_apart_shifts() {
+    let d = Excitation::Prbs
+        .generate_many(2047, 3, 1.0, &mut ChaCha8Rng::seed_from_u64(5))
+        .unwrap();
+    let shift_of = |a: &[f64], b: &[f64]| {
+        (0..2047)
+            .find(|s| (0..2047).all(|k| b[k] == a[(k + s) % 2047]))
+            .unwrap()
+    };
+    assert_eq!(shift_of(&d[0], &d[1]), 682);
+    assert_eq!(shift_of(&d[1], &d[2]), 682);
+    // no pair is correlated at any lag a profile looks at
+    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+        for lag in 0..50 {
+            let c: f64 = (0..2047 - lag)
+                .map(|k| d[i][k] * d[j][k + lag])
+                .sum::<f64>()
+                / (2047 - lag) as f64;
+            assert!(c.abs() < 0.1, "dithers {i},{j} correlate {c} at lag {lag}");
+        }
+    }
+    let g = Excitation::Gaussian
+        .generate_many(100, 2, 1.0, &mut ChaCha8Rng::seed_from_u64(5))
+        .unwrap();
+    assert_ne!(g[0], g[1]);
+}

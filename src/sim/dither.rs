@@ -257,6 +257,42 @@ impl Excitation {
         }
     }
 
+    /// `count` dithers of `n` samples each, one per MV.
+    ///
+    /// For the PRBS all dithers are the one m-sequence of the order (a register has only one),
+    /// so they are started ⌊period/count⌋ bits apart from a seeded random state: any two are
+    /// then shifted copies at least that far apart and look independent at every lag an MI
+    /// profile examines. The other types draw independent sequences.
+    pub fn generate_many(
+        self,
+        n: usize,
+        count: usize,
+        std: f64,
+        rng: &mut impl Rng,
+    ) -> Result<Vec<Vec<f64>>, SimError> {
+        if self != Self::Prbs {
+            return (0..count).map(|_| self.generate(n, std, rng)).collect();
+        }
+        if !(std.is_finite() && std > 0.0) {
+            return Err(SimError::parameter(
+                "dither standard deviation",
+                std,
+                "must be positive and finite",
+            ));
+        }
+        let prbs = Prbs::new(Prbs::order_for(n), std, 1)?;
+        let spacing = prbs.period() / count.max(1);
+        let mut lfsr = Lfsr::new(prbs.order, rng.random::<u32>())?;
+        let mut out = Vec::with_capacity(count);
+        for _ in 0..count {
+            out.push(prbs.generate_from_state(n, lfsr.state()));
+            for _ in 0..spacing {
+                lfsr.next_bit();
+            }
+        }
+        Ok(out)
+    }
+
     /// `n` samples of zero mean and standard deviation `std`.
     pub fn generate(self, n: usize, std: f64, rng: &mut impl Rng) -> Result<Vec<f64>, SimError> {
         if !(std.is_finite() && std > 0.0) {

@@ -167,13 +167,12 @@ pub(crate) fn run(n: usize, opts: &CaseOptions) -> Result<CaseOutput, SimError> 
     let m = Mismatch::parse(opts.mismatch.as_deref())?;
     let plant = self::plant(m);
     let nominal = nominal();
-    let mut dither_rng = stream(opts.seed, DITHER_STREAM);
-    let dither = (0..3)
-        .map(|_| {
-            opts.excitation
-                .generate(n, opts.dither_std, &mut dither_rng)
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let dither = opts.excitation.generate_many(
+        n,
+        3,
+        opts.dither_std,
+        &mut stream(opts.seed, DITHER_STREAM),
+    )?;
     let mut noise_rng = stream(opts.seed, NOISE_STREAM);
     let variance = NOISE_VARIANCE * opts.noise_scale * opts.noise_scale;
     let noise = noise_filters(opts.disturbance)
