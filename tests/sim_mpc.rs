@@ -127,7 +127,7 @@ fn continuous2x3_mpc_respects_its_constraints_at_every_step() {
     let cfg = continuous2x3::mpc_config();
     let u_op = continuous2x3::U_OP.to_vec();
     let mut mpc = LinearMpc::new(
-        &continuous2x3::linearised(continuous2x3::NOMINAL_A, u_op[0]).unwrap(),
+        &continuous2x3::linearised(continuous2x3::NOMINAL_A).unwrap(),
         u_op.clone(),
         u_op.clone(),
         cfg.clone(),

@@ -1,5 +1,7 @@
 //! ARX models `A(q⁻¹) y(t) = Σᵢ q^-nkᵢ Bᵢ(q⁻¹) uᵢ(t) + e(t)` (multi-input, single output).
 
+use std::collections::VecDeque;
+
 use super::error::{ModelError, check_poly};
 use super::transfer::DiscreteTf;
 
@@ -119,6 +121,68 @@ impl Arx {
     }
 }
 
+impl Arx {
+    /// A step-by-step one-step-ahead predictor with empty history (the online form of
+    /// [`Arx::predict`]).
+    pub fn predictor(&self) -> ArxPredictor {
+        let depth = self
+            .b
+            .iter()
+            .zip(&self.delays)
+            .map(|(b, d)| b.len() + d)
+            .max()
+            .unwrap_or(0);
+        ArxPredictor {
+            model: self.clone(),
+            u_past: VecDeque::from(vec![vec![0.0; self.b.len()]; depth]),
+            y_past: VecDeque::from(vec![0.0; self.a.len() - 1]),
+        }
+    }
+}
+
+/// The state of an online ARX predictor: past inputs and past measured outputs.
+#[derive(Debug, Clone)]
+pub struct ArxPredictor {
+    model: Arx,
+    /// `u(t), u(t−1), …` after a step (most recent first; one vector per sample).
+    u_past: VecDeque<Vec<f64>>,
+    /// Measured `y(t−1), y(t−2), …`.
+    y_past: VecDeque<f64>,
+}
+
+impl ArxPredictor {
+    /// Takes `u(t)` and returns the prediction of `y(t)` from the past measurements, then records
+    /// the measured `y(t)` for the next sample.
+    pub fn step(&mut self, u: &[f64], y_measured: f64) -> Result<f64, ModelError> {
+        let m = &self.model;
+        if u.len() != m.b.len() {
+            return Err(ModelError::Dimension {
+                what: "ARX predictor inputs".into(),
+                expected: m.b.len(),
+                found: u.len(),
+            });
+        }
+        if !self.u_past.is_empty() {
+            self.u_past.pop_back();
+            self.u_past.push_front(u.to_vec());
+        }
+        let mut v = 0.0;
+        for (i, (bi, nk)) in m.b.iter().zip(&m.delays).enumerate() {
+            for (j, b) in bi.iter().enumerate() {
+                v += b * self.u_past[nk + j][i];
+            }
+        }
+        for (j, a) in m.a.iter().enumerate().skip(1) {
+            v -= a * self.y_past[j - 1];
+        }
+        if !self.y_past.is_empty() {
+            self.y_past.pop_back();
+            self.y_past.push_front(y_measured);
+        }
+        Ok(v)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -135,6 +199,28 @@ mod tests {
             m.channel(0).unwrap().impulse_response(4),
             vec![0.0, 2.0, 1.0, 0.5]
         );
+    }
+
+    #[test]
+    fn online_predictor_equals_the_whole_record_prediction() {
+        let m = Arx::new(
+            vec![1.0, -1.05, 0.136],
+            vec![vec![0.5, -0.2], vec![1.0]],
+            vec![1, 0],
+        )
+        .unwrap();
+        let u1: Vec<f64> = (0..25).map(|k| (k as f64 * 0.7).sin()).collect();
+        let u2: Vec<f64> = (0..25).map(|k| (k % 3) as f64).collect();
+        let y: Vec<f64> = (0..25).map(|k| (k as f64 * 0.3).cos()).collect();
+        let whole = m.predict(&[u1.clone(), u2.clone()], &y).unwrap();
+        let mut p = m.predictor();
+        for k in 0..25 {
+            assert!(
+                (p.step(&[u1[k], u2[k]], y[k]).unwrap() - whole[k]).abs() < 1e-12,
+                "k={k}"
+            );
+        }
+        assert!(p.step(&[1.0], 0.0).is_err());
     }
 
     #[test]

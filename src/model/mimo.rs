@@ -2,6 +2,7 @@
 
 use super::error::ModelError;
 use super::hammerstein::{Hammerstein, HammersteinFilter};
+use super::transfer::DiscreteTf;
 
 /// An `ny × nu` matrix of channels; `None` is a zero channel.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,6 +64,39 @@ impl MimoModel {
     /// True when every channel is linear (identity map).
     pub fn is_linear(&self) -> bool {
         self.channels.iter().flatten().all(|c| c.map.is_identity())
+    }
+
+    /// The model linearised at the constant input `u_op`, in deviations from it: every static
+    /// map `f` is replaced by its slope `f'(u_op)` as a gain in front of the same linear dynamics
+    /// (what MATLAB's `linearize` gives for a Hammerstein channel).
+    pub fn linearised(&self, u_op: &[f64]) -> Result<MimoModel, ModelError> {
+        if u_op.len() != self.nu {
+            return Err(ModelError::Dimension {
+                what: "operating point".into(),
+                expected: self.nu,
+                found: u_op.len(),
+            });
+        }
+        let channels = self
+            .channels
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                c.as_ref()
+                    .map(|c| {
+                        let slope = c.map.slope(u_op[k % self.nu]);
+                        let b = c.tf.numerator().iter().map(|v| v * slope).collect();
+                        DiscreteTf::new(b, c.tf.denominator().to_vec(), c.tf.delay())
+                            .map(Hammerstein::linear)
+                    })
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(MimoModel {
+            ny: self.ny,
+            nu: self.nu,
+            channels,
+        })
     }
 
     /// A fresh state with zero initial conditions.
@@ -178,5 +212,14 @@ mod tests {
         assert_eq!(y[1], vec![0.0, 4.0, 3.0, 0.0]);
         assert!(MimoModel::new(vec![vec![None, None], vec![None]]).is_err());
         assert!(m.state().step(&[1.0]).is_err());
+
+        // linearised at u2 = 1.5: the square law becomes a gain of 3 on the same dynamics
+        let lin = m.linearised(&[0.0, 1.5]).unwrap();
+        assert!(lin.is_linear());
+        let y = lin
+            .simulate(&[vec![0.0; 4], vec![1.0, 0.0, 0.0, 0.0]])
+            .unwrap();
+        assert_eq!(y[1], vec![0.0, 3.0, 0.0, 0.0]);
+        assert!(m.linearised(&[0.0]).is_err());
     }
 }

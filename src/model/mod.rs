@@ -16,7 +16,7 @@ mod state_space;
 mod transfer;
 mod zoh;
 
-pub use arx::Arx;
+pub use arx::{Arx, ArxPredictor};
 pub use error::ModelError;
 pub use hammerstein::{Hammerstein, HammersteinFilter, StaticMap};
 pub use matrix::Mat;

@@ -74,23 +74,10 @@ pub fn plant(a: f64) -> Result<MimoModel, SimError> {
     ])?)
 }
 
-/// The nominal model linearised at `u1 = u1_op` (the MPC's model, in deviations from [`U_OP`]):
-/// `a·u1²` becomes `2·a·u1_op·Δu1`.
-pub fn linearised(a: f64, u1_op: f64) -> Result<MimoModel, SimError> {
-    let k = 2.0 * a * u1_op;
-    let (g22, g23) = linear_part()?;
-    Ok(MimoModel::new(vec![
-        vec![
-            Some(Hammerstein::linear(zoh(&[k], &[1.0, 1.0])?)),
-            None,
-            None,
-        ],
-        vec![
-            Some(Hammerstein::linear(zoh(&[k, 2.0 * k], &[1.0, 2.0, 1.0])?)),
-            Some(Hammerstein::linear(g22)),
-            Some(Hammerstein::linear(g23)),
-        ],
-    ])?)
+/// The nominal model linearised at the operating point (the MPC's model, in deviations from
+/// [`U_OP`]): `a·u1²` becomes `2·a·u1_op·Δu1`, the rest is already linear.
+pub fn linearised(a: f64) -> Result<MimoModel, SimError> {
+    Ok(plant(a)?.linearised(&U_OP)?)
 }
 
 /// The noise filters of eq 26 at [`PERIOD`].
@@ -155,7 +142,7 @@ pub(crate) fn run(n: usize, opts: &CaseOptions) -> Result<CaseOutput, SimError> 
         .collect::<Result<Vec<_>, _>>()?;
     let setpoint = steady_output(&nominal)?;
     let mut mpc = LinearMpc::new(
-        &linearised(NOMINAL_A, U_OP[0])?,
+        &linearised(NOMINAL_A)?,
         U_OP.to_vec(),
         U_OP.to_vec(),
         mpc_config(),
