@@ -1,6 +1,11 @@
 //! A small dense row-major matrix: just what state-space realisation, the zero-order hold and the
 //! predictive controllers need (products, sums, the matrix exponential). Orders stay below ~10,
 //! so a dependency on a linear-algebra crate would buy nothing.
+//!
+//! The arithmetic methods panic on mismatched dimensions: they are called only on matrices whose
+//! sizes the model constructors have already checked.
+
+use super::error::ModelError;
 
 /// A dense `rows × cols` matrix stored row by row.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,17 +34,22 @@ impl Mat {
         m
     }
 
-    /// A matrix from its rows; every row must have the same length (checked by `debug_assert`,
-    /// callers inside the crate build rows programmatically).
-    pub fn from_rows(rows: &[Vec<f64>]) -> Self {
+    /// A matrix from its rows; every row must have the same length.
+    pub fn from_rows(rows: &[Vec<f64>]) -> Result<Self, ModelError> {
         let r = rows.len();
         let c = rows.first().map_or(0, Vec::len);
-        debug_assert!(rows.iter().all(|row| row.len() == c));
-        Self {
+        if let Some(bad) = rows.iter().find(|row| row.len() != c) {
+            return Err(ModelError::Dimension {
+                what: "matrix row length".into(),
+                expected: c,
+                found: bad.len(),
+            });
+        }
+        Ok(Self {
             rows: r,
             cols: c,
             data: rows.iter().flatten().copied().collect(),
-        }
+        })
     }
 
     /// Number of rows.
@@ -154,7 +164,7 @@ mod tests {
     #[test]
     fn expm_of_rotation_generator_is_a_rotation() {
         let t = 2.7;
-        let a = Mat::from_rows(&[vec![0.0, -t], vec![t, 0.0]]);
+        let a = Mat::from_rows(&[vec![0.0, -t], vec![t, 0.0]]).unwrap();
         let e = a.expm();
         assert!((e[(0, 0)] - t.cos()).abs() < 1e-12);
         assert!((e[(1, 0)] - t.sin()).abs() < 1e-12);
@@ -163,7 +173,8 @@ mod tests {
 
     #[test]
     fn expm_of_diagonal_is_elementwise() {
-        let a = Mat::from_rows(&[vec![-3.0, 0.0], vec![0.0, 1.5]]);
+        let a = Mat::from_rows(&[vec![-3.0, 0.0], vec![0.0, 1.5]]).unwrap();
+        assert!(Mat::from_rows(&[vec![1.0], vec![1.0, 2.0]]).is_err());
         let e = a.expm();
         assert!((e[(0, 0)] - (-3.0f64).exp()).abs() < 1e-12);
         assert!((e[(1, 1)] - 1.5f64.exp()).abs() < 1e-12);

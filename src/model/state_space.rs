@@ -40,6 +40,8 @@ impl StateSpace {
         if !(t.is_finite() && t > 0.0) {
             return Err(ModelError::BadSamplePeriod(t));
         }
+        // validates the sizes before they are used as indices
+        Self::new(a.clone(), b.clone(), c.clone(), d.clone())?;
         let (n, m) = (a.rows(), b.cols());
         let mut aug = Mat::zeros(n + m, n + m);
         for i in 0..n {
@@ -143,9 +145,9 @@ mod tests {
     #[test]
     fn double_integrator_zoh_by_hand() {
         // x1' = x2, x2' = u: Ad = [[1, T], [0, 1]], Bd = [T²/2, T]
-        let a = Mat::from_rows(&[vec![0.0, 1.0], vec![0.0, 0.0]]);
-        let b = Mat::from_rows(&[vec![0.0], vec![1.0]]);
-        let c = Mat::from_rows(&[vec![1.0, 0.0]]);
+        let a = Mat::from_rows(&[vec![0.0, 1.0], vec![0.0, 0.0]]).unwrap();
+        let b = Mat::from_rows(&[vec![0.0], vec![1.0]]).unwrap();
+        let c = Mat::from_rows(&[vec![1.0, 0.0]]).unwrap();
         let d = Mat::zeros(1, 1);
         let t = 0.4;
         let ss = StateSpace::zoh(&a, &b, &c, &d, t).unwrap();
@@ -173,5 +175,16 @@ mod tests {
         )
         .unwrap();
         assert!(ss.state().step(&[1.0, 2.0]).is_err());
+        let bad_b = Mat::zeros(2, 1);
+        assert!(
+            StateSpace::zoh(
+                &Mat::identity(1),
+                &bad_b,
+                &Mat::zeros(1, 1),
+                &Mat::zeros(1, 1),
+                0.1
+            )
+            .is_err()
+        );
     }
 }

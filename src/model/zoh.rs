@@ -66,7 +66,9 @@ impl ContinuousTf {
         if n > 0 {
             b[(0, 0)] = 1.0;
         }
-        (a, b, c, Mat::from_rows(&[vec![dd]]))
+        let mut d = Mat::zeros(1, 1);
+        d[(0, 0)] = dd;
+        (a, b, c, d)
     }
 
     /// Zero-order-hold discretisation at sample period `t` seconds.
