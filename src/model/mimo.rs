@@ -45,12 +45,35 @@ impl MimoModel {
 
     /// The channel from input `i` to output `j` (0-based).
     pub fn channel(&self, j: usize, i: usize) -> Option<&Hammerstein> {
+        if j >= self.ny || i >= self.nu {
+            return None;
+        }
         self.channels[j * self.nu + i].as_ref()
     }
 
     /// Replaces one channel (how the cases inject a mismatch).
-    pub fn set_channel(&mut self, j: usize, i: usize, channel: Option<Hammerstein>) {
+    pub fn set_channel(
+        &mut self,
+        j: usize,
+        i: usize,
+        channel: Option<Hammerstein>,
+    ) -> Result<(), ModelError> {
+        if j >= self.ny {
+            return Err(ModelError::Dimension {
+                what: "output index (0-based, must be below)".into(),
+                expected: self.ny,
+                found: j,
+            });
+        }
+        if i >= self.nu {
+            return Err(ModelError::Dimension {
+                what: "input index (0-based, must be below)".into(),
+                expected: self.nu,
+                found: i,
+            });
+        }
         self.channels[j * self.nu + i] = channel;
+        Ok(())
     }
 
     /// True when no output depends on the current input, so a loop can read `y(t)` first.
@@ -221,5 +244,9 @@ mod tests {
             .unwrap();
         assert_eq!(y[1], vec![0.0, 3.0, 0.0, 0.0]);
         assert!(m.linearised(&[0.0]).is_err());
+        let mut m2 = m.clone();
+        assert!(m2.set_channel(2, 0, None).is_err());
+        m2.set_channel(1, 0, None).unwrap();
+        assert!(m2.channel(1, 0).is_none() && m2.channel(5, 5).is_none());
     }
 }
