@@ -17,7 +17,8 @@
 //! agrees at T = 1 s).
 //!
 //! The closed loop: operating point `u = (1, 0, 0)` (at u1 = 0 the linearised gain of u1² is zero
-//! and u1 would drop out of the MPC), set points the nominal steady outputs there `(0.2, 0.4)`,
+//! and u1 would drop out of the MPC), set points the nominal mean steady outputs there under
+//! the dither (`(0.4, 0.8)` for a ±1 PRBS, see [`super::dithered_set_point`]),
 //! ±1 PRBS dithers on all three MVs. The nominal prediction `yhat` is the nonlinear nominal model
 //! `G0` (a = 0.2) on the total MVs; the MPC's own model is the linearisation.
 //!
@@ -99,7 +100,7 @@ pub fn mpc_config() -> MpcConfig {
         q: vec![1.0, 1.0],
         r: vec![1.0, 1.0, 1.0],
         // u1 stays positive so the sign of its gain (2·a·u1) never flips under the linear MPC
-        u_min: vec![0.5, -3.0, -3.0],
+        u_min: vec![0.2, -3.0, -3.0],
         u_max: vec![2.5, 3.0, 3.0],
         du_max: vec![0.3; 3],
     }
@@ -140,7 +141,7 @@ pub(crate) fn run(n: usize, opts: &CaseOptions) -> Result<CaseOutput, SimError> 
         .iter()
         .map(|h| coloured_noise(h, n, variance, 500, &mut noise_rng))
         .collect::<Result<Vec<_>, _>>()?;
-    let setpoint = steady_output(&nominal)?;
+    let setpoint = super::dithered_set_point(&nominal, &U_OP, &dither)?;
     let mut mpc = LinearMpc::new(
         &linearised(NOMINAL_A)?,
         U_OP.to_vec(),
@@ -166,13 +167,4 @@ pub(crate) fn run(n: usize, opts: &CaseOptions) -> Result<CaseOutput, SimError> 
             opts.excitation, opts.dither_std
         ),
     })
-}
-
-/// Steady nominal outputs at [`U_OP`].
-fn steady_output(model: &MimoModel) -> Result<Vec<f64>, SimError> {
-    let mut s = model.state();
-    for _ in 0..400 {
-        s.step(&U_OP)?;
-    }
-    Ok(s.peek())
 }

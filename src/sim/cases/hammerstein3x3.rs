@@ -18,7 +18,8 @@
 //!
 //! The closed loop: the NMPC of [`crate::sim::Nmpc`] on the nominal model, operating point
 //! `u = (0, 1, 0)` (at u2 = 0 the slope of u2² is zero and a ±1 dither gives u2² ≡ 1, so nothing
-//! about g21 would be observable), set points the nominal steady outputs there, ±1 PRBS dithers.
+//! about g21 would be observable), set points the nominal mean steady outputs there under the
+//! dither (see [`super::dithered_set_point`]), ±1 PRBS dithers.
 //!
 //! Columns: `time, u1..u3, ud1..ud3, y1..y3, yhat1..yhat3, e1..e3`.
 
@@ -179,13 +180,7 @@ pub(crate) fn run(n: usize, opts: &CaseOptions) -> Result<CaseOutput, SimError> 
         .iter()
         .map(|h| coloured_noise(h, n, variance, 200, &mut noise_rng))
         .collect::<Result<Vec<_>, _>>()?;
-    let setpoint = {
-        let mut s = nominal.state();
-        for _ in 0..400 {
-            s.step(&U_OP)?;
-        }
-        s.peek()
-    };
+    let setpoint = super::dithered_set_point(&nominal, &U_OP, &dither)?;
     let mut nmpc = Nmpc::new(nominal.clone(), U_OP.to_vec(), nmpc_config(), 2, 0.5)?;
     let rec = ClosedLoop {
         plant: &plant,

@@ -12,6 +12,7 @@ use super::dither::Excitation;
 use super::error::SimError;
 use super::mpc::MpcStats;
 use crate::io::Table;
+use crate::model::MimoModel;
 
 /// The cases `mpmwatch simulate` knows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -160,3 +161,65 @@ pub(crate) fn stream(seed: u64, stream: u64) -> ChaCha8Rng {
 /// Stream numbers.
 pub(crate) const DITHER_STREAM: u64 = 1;
 pub(crate) const NOISE_STREAM: u64 = 2;
+
+/// Set points consistent with the dithered operating point: the nominal model's mean steady
+/// output when each input is `u_op` plus its dither, `rⱼ = Σᵢ Gⱼᵢ(1) · mean_t fⱼᵢ(u_opᵢ + udᵢ(t))`.
+///
+/// The dither's power shifts the mean of an even map (`E[(u+ud)²] = u² + σ²`); a set point taken
+/// at the undithered `u_op` would be unreachable and pin the controller to a bound even without
+/// mismatch.
+pub fn dithered_set_point(
+    model: &MimoModel,
+    u_op: &[f64],
+    dither: &[Vec<f64>],
+) -> Result<Vec<f64>, SimError> {
+    if u_op.len() != model.inputs() || dither.len() != model.inputs() {
+        return Err(SimError::parameter(
+            "set point inputs",
+            u_op.len(),
+            &format!("need {} inputs and dithers", model.inputs()),
+        ));
+    }
+    (0..model.outputs())
+        .map(|j| {
+            let mut r = 0.0;
+            for i in 0..model.inputs() {
+                if let Some(ch) = model.channel(j, i) {
+                    let gain = ch.tf.dc_gain().ok_or_else(|| {
+                        SimError::parameter(
+                            "set point",
+                            format!("channel u{} → y{}", i + 1, j + 1),
+                            "has no finite static gain",
+                        )
+                    })?;
+                    let d = &dither[i];
+                    let mean = d.iter().map(|v| ch.map.value(u_op[i] + v)).sum::<f64>()
+                        / d.len().max(1) as f64;
+                    r += gain * mean;
+                }
+            }
+            Ok(r)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{DiscreteTf, Hammerstein, StaticMap};
+
+    #[test]
+    fn set_point_includes_the_dither_power_of_an_even_map() {
+        let g = DiscreteTf::new(vec![0.0, 0.5], vec![1.0, -0.5], 0).unwrap(); // static gain 1
+        let m = MimoModel::new(vec![vec![
+            Some(Hammerstein::new(StaticMap::Square, g.clone()).unwrap()),
+            Some(Hammerstein::linear(g)),
+        ]])
+        .unwrap();
+        let dither = vec![vec![1.0, -1.0, 1.0, -1.0], vec![1.0, -1.0, -1.0, 1.0]];
+        // E[(1 + ud)²] = 1 + 1 = 2; E[3 + ud] = 3
+        let r = dithered_set_point(&m, &[1.0, 3.0], &dither).unwrap();
+        assert!((r[0] - 5.0).abs() < 1e-12, "{r:?}");
+        assert!(dithered_set_point(&m, &[1.0], &dither).is_err());
+    }
+}
