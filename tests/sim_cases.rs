@@ -328,3 +328,33 @@ fn bad_case_options_are_named_errors() {
         .is_err()
     );
 }
+
+#[test]
+fn noise_free_and_mismatch_free_residuals_are_exactly_zero() {
+    for case in [CaseName::Continuous2x3, CaseName::Hammerstein3x3] {
+        let o = CaseOptions {
+            mismatch: Some("none".into()),
+            noise_scale: 0.0,
+            ..opts(8)
+        };
+        let t = run(case, &o);
+        for name in t.names().iter().filter(|n| n.starts_with('e')) {
+            assert!(
+                t.column(name).unwrap().iter().all(|v| *v == 0.0),
+                "{case:?}: {name}"
+            );
+        }
+        // and the same loop with its mismatch has non-zero residuals
+        let t = run(
+            case,
+            &CaseOptions {
+                mismatch: None,
+                ..o
+            },
+        );
+        assert!(
+            t.column("e1").unwrap().iter().any(|v| v.abs() > 0.1),
+            "{case:?}"
+        );
+    }
+}
