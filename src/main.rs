@@ -50,6 +50,8 @@ enum Verb {
     ///
     /// Example: cargo run --release -- bench --n 2048 --json
     Bench(cmd::bench::Args),
+    /// Simulate one of the paper's plants and write its CSV (see `simulate --help`).
+    Simulate(cmd::simulate::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -58,5 +60,6 @@ fn main() -> anyhow::Result<()> {
         Verb::Mi(args) => cmd::mi::run(args),
         Verb::Bench(args) => cmd::bench::run(args),
         Verb::Analyze(args) => cmd::analyze::run(args),
+        Verb::Simulate(args) => cmd::simulate::run(args),
     }
 }
