@@ -10,6 +10,7 @@ use crate::info::significance::test_prepared;
 use crate::info::{InfoError, LaggedPair, Lags, MiOptions, SurrogateOptions, Threshold, auto_tmax};
 
 use super::verdict::{Channel, localise};
+use super::whiten::ArWhitener;
 
 /// A named series.
 #[derive(Debug, Clone, Copy)]
@@ -47,6 +48,10 @@ pub struct MatrixOptions {
     pub joint_embedding: bool,
     /// z of the CCF and Pearson limits (1.96: 95 %).
     pub ccf_z: f64,
+    /// Pre-whiten each residual with an AR model of at most this order (AIC) before every
+    /// statistic, MI and CCF alike; `None` analyses the raw residuals as the paper does.
+    /// See [`super::ArWhitener`] for why this keeps the test's level and raises its power.
+    pub whiten: Option<usize>,
 }
 
 impl Default for MatrixOptions {
@@ -57,6 +62,7 @@ impl Default for MatrixOptions {
             surrogates: SurrogateOptions::default(),
             joint_embedding: true,
             ccf_z: 1.96,
+            whiten: Some(10),
         }
     }
 }
@@ -182,6 +188,8 @@ pub struct MatrixResult {
     pub z: f64,
     /// Base seed.
     pub seed: u64,
+    /// Per residual: the whitening AR model (order 0 and ratio 1 when whitening is off).
+    pub whitening: Vec<ArWhitener>,
 }
 
 impl MatrixResult {
@@ -223,11 +231,24 @@ pub fn analyze(
     if !excited.iter().any(|&e| e) {
         return Err(InfoError::Constant { series: "every dither".into(), value: dithers[0].values[0] });
     }
+    let whitening: Vec<ArWhitener> = residuals
+        .iter()
+        .map(|r| match opts.whiten {
+            Some(max) => ArWhitener::fit(r.values, max),
+            None => ArWhitener { coefficients: Vec::new(), variance_ratio: 1.0 },
+        })
+        .collect();
+    let whitened: Vec<Vec<f64>> = residuals.iter().zip(&whitening).map(|(r, w)| w.apply(r.values)).collect();
+    // The automatic tmax reads the memory of the raw residual (Abarbanel's rule on what the
+    // dither drives); whitening spreads an effect over `order` further lags, so they are added.
     let lags: Vec<Lags> = residuals
         .iter()
-        .map(|r| match opts.lags {
+        .zip(&whitening)
+        .map(|(r, w)| match opts.lags {
             LagChoice::Fixed(l) => Ok(l),
-            LagChoice::Auto { max } => Lags::new(1, auto_tmax(r.values, max, opts.mi.k)?),
+            LagChoice::Auto { max } => {
+                Lags::new(1, (auto_tmax(r.values, max, opts.mi.k)? + w.order()).min(max))
+            }
         })
         .collect::<Result<_, _>>()?;
     let pairs: Vec<(usize, usize)> = (0..residuals.len())
@@ -236,7 +257,12 @@ pub fn analyze(
         .collect();
     let cells = pairs
         .par_iter()
-        .map(|&(j, i)| cell(&dithers[i], &residuals[j], i, j, lags[j], opts))
+        .map(|&(j, i)| {
+            let p = whitening[j].order();
+            let d = Signal { name: dithers[i].name, values: &dithers[i].values[p..] };
+            let r = Signal { name: residuals[j].name, values: &whitened[j] };
+            cell(&d, &r, i, j, lags[j], opts)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let channels = localise(&cells, &excited, dithers, residuals);
     Ok(MatrixResult {
@@ -250,6 +276,7 @@ pub fn analyze(
         surrogates: opts.surrogates.count,
         z: opts.surrogates.z,
         seed: opts.surrogates.seed,
+        whitening,
     })
 }
 

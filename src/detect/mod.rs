@@ -5,6 +5,8 @@
 
 mod matrix;
 mod verdict;
+mod whiten;
 
 pub use matrix::{CcfBaseline, Cell, ElementTest, LagChoice, MatrixOptions, MatrixResult, Signal, analyze};
 pub use verdict::{Channel, Verdict, localise};
+pub use whiten::ArWhitener;
