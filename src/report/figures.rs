@@ -276,3 +276,84 @@ fn draw_heatmap<DB: DrawingBackend>(
     }
     Ok(())
 }
+
+/// One named series of (x, y) points, with an optional ± band (e.g. one standard deviation).
+#[derive(Debug, Clone)]
+pub struct XySeries {
+    /// Legend label.
+    pub label: String,
+    /// Points.
+    pub points: Vec<(f64, f64)>,
+    /// Half-widths of an error bar at each point, if any.
+    pub error: Option<Vec<f64>>,
+}
+
+/// A simple x–y chart (lines with markers, optional error bars), as SVG and PNG.
+pub fn write_xy_chart(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[XySeries],
+) -> Result<Vec<PathBuf>, FigureError> {
+    ensure_font();
+    std::fs::create_dir_all(dir).map_err(|source| FigureError::Dir { path: dir.to_path_buf(), source })?;
+    let files = svg_and_png!(dir, name, (720, 420), |root| draw_xy(root, title, x_label, y_label, series))?;
+    Ok(files.to_vec())
+}
+
+const PALETTE: [RGBColor; 4] =
+    [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189)];
+
+fn draw_xy<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[XySeries],
+) -> DrawResult<DB> {
+    root.fill(&WHITE)?;
+    let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
+    let ys = series.iter().flat_map(|s| {
+        s.points.iter().enumerate().flat_map(move |(k, p)| {
+            let e = s.error.as_ref().map_or(0.0, |e| e[k]);
+            [p.1 - e, p.1 + e]
+        })
+    });
+    let (x0, x1) = bounds(xs);
+    let (y0, y1) = bounds(ys.chain([0.0]));
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, 16))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .label_style((FONT, 11))
+        .axis_desc_style((FONT, 12))
+        .draw()?;
+    for (k, s) in series.iter().enumerate() {
+        let colour = PALETTE[k % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))?
+            .label(s.label.clone())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2)));
+        chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 4, colour.filled())))?;
+        if let Some(err) = &s.error {
+            for (p, e) in s.points.iter().zip(err) {
+                chart.draw_series(LineSeries::new([(p.0, p.1 - e), (p.0, p.1 + e)], colour))?;
+            }
+        }
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font((FONT, 12))
+        .draw()?;
+    Ok(())
+}

@@ -2,6 +2,7 @@
 //! Everything here writes files; the numbers come from `detect/` and `info/`.
 
 pub mod figures;
+pub mod reproduce;
 mod summary;
 
 pub use summary::{ChannelSummary, summarise};
