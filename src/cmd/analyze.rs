@@ -59,6 +59,11 @@ pub struct Args {
     /// disturbance that buries the dither's contribution; the test's level is unchanged.
     #[arg(long)]
     no_whiten: bool,
+    /// Test each dither against the residual as it is, instead of first subtracting what the
+    /// other dithers explain linearly (over lags 0..tmax). Subtracting keeps the test's level
+    /// and finds a wrong channel hidden under a louder one.
+    #[arg(long)]
+    no_partial: bool,
     /// Largest AR order of the pre-whitening filter.
     #[arg(long, default_value_t = 10)]
     whiten_order: usize,
@@ -145,7 +150,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ..SurrogateOptions::default()
         },
         joint_embedding: !args.no_joint,
-        ccf_z: 1.96,
+        ccf_alpha: 0.05,
+        partial_out: !args.no_partial,
         whiten: (!args.no_whiten).then_some(args.whiten_order),
     };
     let d: Vec<Signal> =

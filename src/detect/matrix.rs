@@ -5,11 +5,12 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::info::correlation::{ccf, ccf_limit, pearson};
+use crate::info::correlation::{ccf, ccf_limit, family_wise_z, pearson};
 use crate::info::significance::test_prepared;
 use crate::info::{InfoError, LaggedPair, Lags, MiOptions, SurrogateOptions, Threshold, auto_tmax};
 
 use super::verdict::{Channel, localise};
+use super::partial::partial_out;
 use super::whiten::ArWhitener;
 
 /// A named series.
@@ -46,8 +47,12 @@ pub struct MatrixOptions {
     pub surrogates: SurrogateOptions,
     /// Also test the embedding of two consecutive dither lags (catches `u(t−1)·u(t−2)`).
     pub joint_embedding: bool,
-    /// z of the CCF and Pearson limits (1.96: 95 %).
-    pub ccf_z: f64,
+    /// Family-wise false-alarm rate of the CCF baseline over an element's lags (Bonferroni);
+    /// the Pearson limit uses the same rate for its single test. Default 0.05.
+    pub ccf_alpha: f64,
+    /// Before testing dither i against residual j, subtract from the residual what the other
+    /// excited dithers explain linearly over lags 0..=tmax (see [`super::partial_out`]).
+    pub partial_out: bool,
     /// Pre-whiten each residual with an AR model of at most this order (AIC) before every
     /// statistic, MI and CCF alike; `None` analyses the raw residuals as the paper does.
     /// See [`super::ArWhitener`] for why this keeps the test's level and raises its power.
@@ -61,7 +66,8 @@ impl Default for MatrixOptions {
             mi: MiOptions::default(),
             surrogates: SurrogateOptions::default(),
             joint_embedding: true,
-            ccf_z: 1.96,
+            ccf_alpha: 0.05,
+            partial_out: true,
             whiten: Some(10),
         }
     }
@@ -135,8 +141,10 @@ pub struct CcfBaseline {
     pub lags: Vec<usize>,
     /// Cross-correlation of dither(t) with residual(t+τ).
     pub values: Vec<f64>,
-    /// ± control limit z/√N.
+    /// ± control limit z/√N, z family-wise over the lags (Bonferroni).
     pub limit: f64,
+    /// The z of that limit.
+    pub z: f64,
     /// Any |CCF| above the limit.
     pub significant: bool,
     /// Pearson r at lag 0.
@@ -238,7 +246,6 @@ pub fn analyze(
             None => ArWhitener { coefficients: Vec::new(), variance_ratio: 1.0 },
         })
         .collect();
-    let whitened: Vec<Vec<f64>> = residuals.iter().zip(&whitening).map(|(r, w)| w.apply(r.values)).collect();
     // The automatic tmax reads the memory of the raw residual (Abarbanel's rule on what the
     // dither drives); whitening spreads an effect over `order` further lags, so they are added.
     let lags: Vec<Lags> = residuals
@@ -258,9 +265,24 @@ pub fn analyze(
     let cells = pairs
         .par_iter()
         .map(|&(j, i)| {
-            let p = whitening[j].order();
-            let d = Signal { name: dithers[i].name, values: &dithers[i].values[p..] };
-            let r = Signal { name: residuals[j].name, values: &whitened[j] };
+            // Partial out the other dithers, then whiten what is left with an AR model fitted
+            // to it (the per-residual whitener is reported; the per-element refit differs only
+            // by the removed dither-driven part).
+            let others: Vec<&[f64]> =
+                (0..dithers.len()).filter(|&k| k != i && excited[k]).map(|k| dithers[k].values).collect();
+            let cut = if opts.partial_out && !others.is_empty() { lags[j].max } else { 0 };
+            let cleaned = if cut > 0 {
+                partial_out(residuals[j].values, &others, cut)
+            } else {
+                residuals[j].values.to_vec()
+            };
+            let w = match opts.whiten {
+                Some(max) => ArWhitener::fit(&cleaned, max),
+                None => ArWhitener { coefficients: Vec::new(), variance_ratio: 1.0 },
+            };
+            let white = w.apply(&cleaned);
+            let d = Signal { name: dithers[i].name, values: &dithers[i].values[cut + w.order()..] };
+            let r = Signal { name: residuals[j].name, values: &white };
             cell(&d, &r, i, j, lags[j], opts)
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -299,13 +321,15 @@ fn cell(
         None
     };
     let ccf_values = ccf(d.values, r.values, lags.min as i64..=lags.max as i64)?;
-    let limit = ccf_limit(d.values.len(), opts.ccf_z);
-    let p = pearson(d.values, r.values, opts.ccf_z)?;
+    let z = family_wise_z(opts.ccf_alpha, lags.len());
+    let limit = ccf_limit(d.values.len(), z);
+    let p = pearson(d.values, r.values, family_wise_z(opts.ccf_alpha, 1))?;
     let ccf = CcfBaseline {
         lags: lags.iter().collect(),
         significant: ccf_values.iter().any(|v| v.abs() > limit),
         values: ccf_values,
         limit,
+        z,
         pearson_r: p.r,
         pearson_limit: p.limit,
     };

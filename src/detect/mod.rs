@@ -4,9 +4,11 @@
 //! verb both call [`analyze`].
 
 mod matrix;
+mod partial;
 mod verdict;
 mod whiten;
 
 pub use matrix::{CcfBaseline, Cell, ElementTest, LagChoice, MatrixOptions, MatrixResult, Signal, analyze};
+pub use partial::partial_out;
 pub use verdict::{Channel, Verdict, localise};
 pub use whiten::ArWhitener;

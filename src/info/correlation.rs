@@ -39,6 +39,54 @@ pub fn ccf_limit(n: usize, z: f64) -> f64 {
     z / (n as f64).sqrt()
 }
 
+/// The z that keeps the family-wise false-alarm rate of `lags` two-sided tests at `alpha`
+/// (Bonferroni): `Φ⁻¹(1 − alpha / (2·lags))`. With pointwise 95 % limits, 20 lags of pure noise
+/// cross a limit somewhere 64 % of the time, which makes a CCF "detection" meaningless.
+pub fn family_wise_z(alpha: f64, lags: usize) -> f64 {
+    normal_quantile(1.0 - alpha / (2.0 * lags.max(1) as f64))
+}
+
+/// The standard normal quantile Φ⁻¹(p), 0 < p < 1, by Acklam's rational approximation
+/// (relative error below 1.2·10⁻⁹), ample for control limits.
+pub fn normal_quantile(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969683028665376e1,
+        2.209460984245205e2,
+        -2.759285104469687e2,
+        1.383_577_518_672_69e2,
+        -3.066479806614716e1,
+        2.506628277459239,
+    ];
+    const B: [f64; 5] =
+        [-5.447609879822406e1, 1.615858368580409e2, -1.556989798598866e2, 6.680131188771972e1, -1.328068155288572e1];
+    const C: [f64; 6] = [
+        -7.784894002430293e-3,
+        -3.223964580411365e-1,
+        -2.400758277161838,
+        -2.549732539343734,
+        4.374664141464968,
+        2.938163982698783,
+    ];
+    const D: [f64; 4] = [7.784695709041462e-3, 3.224671290700398e-1, 2.445134137142996, 3.754408661907416];
+    if !(p > 0.0 && p < 1.0) {
+        return if p <= 0.0 { f64::NEG_INFINITY } else { f64::INFINITY };
+    }
+    let tail = |q: f64| {
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p < 0.02425 {
+        tail((-2.0 * p.ln()).sqrt())
+    } else if p > 1.0 - 0.02425 {
+        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
+}
+
 /// Pearson's correlation of paired samples with the critical |r| at two-sided level given by
 /// `z` (1.96 for 95 %) from Fisher's transform, `tanh(z / √(N − 3))`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -73,6 +121,23 @@ mod tests {
         let best = r.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap().0 as i64 - 5;
         assert_eq!(best, 3);
         assert!(r[8] > 0.95 && r[8] <= 1.0, "{}", r[8]);
+    }
+
+    #[test]
+    fn normal_quantiles_match_scipy() {
+        // scipy.stats.norm.ppf; Acklam's approximation is good to about 1e-9 relative.
+        for (p, want) in [
+            (0.5, 0.0),
+            (0.975, 1.959963984540054),
+            (1.0 - 0.05 / 40.0, 3.023341439739154),
+            (0.999, 3.090232306167813),
+            (0.01, -2.3263478740408408),
+            (1e-6, -4.753424308822899),
+        ] {
+            let got = normal_quantile(p);
+            assert!((got - want).abs() <= 2e-9 * want.abs().max(1.0), "p = {p}: {got} vs {want}");
+        }
+        assert!((family_wise_z(0.05, 20) - 3.023341439739154).abs() < 1e-8);
     }
 
     #[test]

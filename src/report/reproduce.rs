@@ -40,6 +40,8 @@ pub struct Claim {
     pub ours: String,
     /// Whether the claim holds in our reproduction.
     pub holds: bool,
+    /// The measured facts behind `ours`, for programs and tests (flagged channels, rates).
+    pub details: serde_json::Value,
 }
 
 /// Settings of a reproduction.
@@ -158,6 +160,7 @@ pub fn claim_model1(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult), Re
             .into(),
         ours,
         holds,
+        details: serde_json::json!({"mi": mi, "ccf": ccf, "mi_raw": mi_raw, "ccf_raw": ccf_raw}),
     };
     Ok((claim, m))
 }
@@ -192,6 +195,7 @@ pub fn claim_data_length(opts: &ReproduceOptions) -> Result<(Claim, LengthStudy)
             .into(),
         ours,
         holds,
+        details: serde_json::json!({"std": study.iter().map(|s| s.2).collect::<Vec<_>>()}),
     };
     Ok((claim, study))
 }
@@ -235,6 +239,7 @@ pub fn claim_excitation(opts: &ReproduceOptions) -> Result<(Claim, Vec<(String, 
                 .into(),
         ours,
         holds: best == "uniform",
+        details: serde_json::json!({"largest": best, "means": study}),
     };
     Ok((claim, study))
 }
@@ -273,6 +278,7 @@ pub fn claim_continuous(
         claim: "Continuous 2×3 with a = 0.8: MI flags ud1→e1 and ud1→e2 and nothing else; the CCF flags none. With a = 0.2 nothing is flagged (Figures 8–9)".into(),
         ours,
         holds,
+        details: serde_json::json!({"mi": mi, "ccf": ccf, "mi_nominal": mi0}),
     };
     Ok((claim, bad, good))
 }
@@ -297,6 +303,7 @@ pub fn claim_hammerstein(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult
         claim: "Hammerstein 3×3 (eqs 27–29): MI flags both changed submodels; linear correlation misses g21 (Figures 10–11)".into(),
         ours,
         holds: both && ccf_misses_g21,
+        details: serde_json::json!({"mi": mi, "ccf": ccf}),
     };
     Ok((claim, m))
 }
@@ -319,6 +326,7 @@ pub fn claim_disturbance(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult
         claim: "A change of the disturbance dynamics alone (eq 30) puts no element above its critical value (Figure 13)".into(),
         ours: format!("MI flags {} with the eq 30 disturbance and no plant change. Seed {}.", list(&mi), opts.seed),
         holds: mi.is_empty(),
+        details: serde_json::json!({"mi": mi}),
     };
     Ok((claim, m))
 }
@@ -368,6 +376,7 @@ pub fn claim_false_alarms(
             .into(),
         ours,
         holds: fraction <= 0.05 && opts.matched_seeds >= 50,
+        details: serde_json::json!({"fraction": fraction, "runs": runs, "alarmed": alarms}),
     };
     Ok((claim, study))
 }

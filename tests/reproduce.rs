@@ -1,0 +1,69 @@
+//! The paper's claims as `mpmwatch reproduce` reports them, one seeded test per claim: the
+//! report's table is backed by these assertions, including where our result differs from the
+//! paper (those tests pin what we measure, so a change in behaviour shows up here first).
+
+use mpmwatch::report::reproduce::{
+    ReproduceOptions, claim_continuous, claim_data_length, claim_disturbance, claim_excitation,
+    claim_false_alarms, claim_hammerstein, claim_model1,
+};
+use serde_json::json;
+
+fn opts() -> ReproduceOptions {
+    ReproduceOptions::default()
+}
+
+#[test]
+fn claim1_model1_mi_finds_the_interaction_and_linear_terms() {
+    let (c, _) = claim_model1(&opts()).unwrap();
+    assert_eq!(c.details["mi"], json!(["u→e2", "u→e3"]), "{}", c.ours);
+    assert_eq!(c.details["ccf"], json!(["u→e3"]), "{}", c.ours);
+    // ε4's dither-driven part (about 0.006 against an innovation of 0.1) is below what 2047
+    // samples resolve, so the claim as a whole does not hold.
+    assert!(!c.holds);
+}
+
+#[test]
+fn claim2_spread_falls_with_record_length() {
+    let (c, study) = claim_data_length(&opts()).unwrap();
+    assert_eq!(study.len(), 7);
+    assert!(c.holds, "{}", c.ours);
+}
+
+#[test]
+fn claim3_excitation_type_ranking() {
+    let (c, study) = claim_excitation(&opts()).unwrap();
+    assert_eq!(study.len(), 3);
+    assert!(study.iter().all(|s| s.1.is_finite()));
+    assert_eq!(c.details["largest"], "Gaussian", "{}", c.ours);
+    assert!(!c.holds);
+}
+
+#[test]
+fn claim4_continuous_plant_mismatch_on_u1_only() {
+    let (c, _, _) = claim_continuous(&opts()).unwrap();
+    assert_eq!(c.details["mi"], json!(["ud1→e1", "ud1→e2"]), "{}", c.ours);
+    assert_eq!(c.details["mi_nominal"], json!([]), "{}", c.ours);
+    // At our operating point u1 ≈ 1 the parabola is locally linear and the CCF sees it.
+    assert!(c.details["ccf"].as_array().unwrap().contains(&json!("ud1→e1")), "{}", c.ours);
+    assert!(!c.holds);
+}
+
+#[test]
+fn claim5_hammerstein_changed_submodels() {
+    let (c, _) = claim_hammerstein(&opts()).unwrap();
+    assert_eq!(c.details["mi"], json!(["ud2→e1"]), "{}", c.ours);
+    assert!(!c.holds);
+}
+
+#[test]
+fn claim6_disturbance_change_alone_is_silent() {
+    let (c, _) = claim_disturbance(&opts()).unwrap();
+    assert!(c.holds, "{}", c.ours);
+}
+
+#[test]
+fn claim7_false_alarm_rate_over_fifty_seeds() {
+    let (c, study) = claim_false_alarms(&opts(), |_| {}).unwrap();
+    assert_eq!(study.iter().map(|s| s.1).sum::<usize>(), 100);
+    assert!(c.holds, "{}", c.ours);
+}
