@@ -103,12 +103,19 @@ fn excitations_have_the_requested_variance() {
 }
 
 #[test]
-fn mimo_prbs_dithers_are_far_apart_shifts() {
+fn mimo_prbs_dithers_are_distinct_m_sequences() {
     let d = Excitation::Prbs.generate_many(2047, 3, 1.0, &mut ChaCha8Rng::seed_from_u64(5)).unwrap();
-    let shift_of =
-        |a: &[f64], b: &[f64]| (0..2047).find(|s| (0..2047).all(|k| b[k] == a[(k + s) % 2047])).unwrap();
-    assert_eq!(shift_of(&d[0], &d[1]), 682);
-    assert_eq!(shift_of(&d[1], &d[2]), 682);
+    // Each is a full-period m-sequence (balanced: 1024 ones), and no dither is a circular shift
+    // of another, nor of a product of two shifts of another (shift-and-add would make it one).
+    for x in &d {
+        assert_eq!(x.iter().filter(|&&v| v > 0.0).count(), 1024);
+    }
+    let is_shift_of = |a: &[f64], b: &[f64]| (0..2047).any(|s| (0..2047).all(|k| b[k] == a[(k + s) % 2047]));
+    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+        assert!(!is_shift_of(&d[i], &d[j]), "dither {j} is a shift of dither {i}");
+        let product: Vec<f64> = (0..2047).map(|k| d[i][k] * d[i][(k + 1) % 2047]).collect();
+        assert!(!is_shift_of(&product, &d[j]), "dither {j} is a shift of dither {i}'s shift-and-add product");
+    }
     // no pair is correlated at any lag a profile looks at
     for (i, j) in [(0, 1), (0, 2), (1, 2)] {
         for lag in 0..50 {
@@ -118,4 +125,24 @@ fn mimo_prbs_dithers_are_far_apart_shifts() {
     }
     let g = Excitation::Gaussian.generate_many(100, 2, 1.0, &mut ChaCha8Rng::seed_from_u64(5)).unwrap();
     assert_ne!(g[0], g[1]);
+}
+
+#[test]
+fn alternative_polynomials_have_maximal_period() {
+    for order in [5u32, 7, 11] {
+        for index in 0..3 {
+            let mut l = mpmwatch::sim::Lfsr::with_polynomial(order, index, 1).unwrap();
+            let period = (1usize << order) - 1;
+            let first = l.state();
+            let mut steps = 0;
+            loop {
+                l.next_bit();
+                steps += 1;
+                if l.state() == first {
+                    break;
+                }
+            }
+            assert_eq!(steps, period, "order {order}, polynomial {index}");
+        }
+    }
 }

@@ -9,8 +9,8 @@ use crate::info::correlation::{ccf, ccf_limit, family_wise_z, pearson};
 use crate::info::significance::test_prepared;
 use crate::info::{InfoError, LaggedPair, Lags, MiOptions, SurrogateOptions, Threshold, auto_tmax};
 
-use super::verdict::{Channel, localise};
 use super::partial::partial_out;
+use super::verdict::{Channel, localise};
 use super::whiten::ArWhitener;
 
 /// A named series.

@@ -107,7 +107,9 @@ fn draw_grid<DB: DrawingBackend>(
         Panel::Mi => {
             format!("MI against lag, surrogate critical value (z = {}, {} surrogates)", m.z, m.surrogates)
         }
-        Panel::Ccf => "Cross-correlation against lag, family-wise 5 % limits over the lags (Bonferroni)".to_string(),
+        Panel::Ccf => {
+            "Cross-correlation against lag, family-wise 5 % limits over the lags (Bonferroni)".to_string()
+        }
     };
     let (top, body) = root.split_vertically(30);
     top.draw(&Text::new(title, (10, 8), (FONT, 16).into_font()))?;

@@ -45,6 +45,7 @@ const TAPS: [&[u32]; 23] = [
 pub struct Lfsr {
     order: u32,
     state: u32,
+    taps: Vec<u32>,
 }
 
 impl Lfsr {
@@ -59,7 +60,21 @@ impl Lfsr {
             0 => 1,
             s => s,
         };
-        Ok(Self { order, state })
+        Ok(Self { order, state, taps: TAPS[(order - PRBS_MIN_ORDER) as usize].to_vec() })
+    }
+
+    /// A register of order `n` on its `index`-th maximal-length feedback polynomial: index 0 is
+    /// the standard table's, further ones are found by searching two- and four-tap feedbacks
+    /// in a fixed order and keeping those whose period is 2^n − 1. Different polynomials give
+    /// different m-sequences, not shifts of one another.
+    pub fn with_polynomial(order: u32, index: usize, state: u32) -> Result<Self, SimError> {
+        let mut lfsr = Self::new(order, state)?;
+        if index > 0 {
+            lfsr.taps = maximal_taps(order, index).ok_or_else(|| {
+                SimError::parameter("PRBS polynomial index", index, "exceeds the polynomials searched")
+            })?;
+        }
+        Ok(lfsr)
     }
 
     /// The current register contents.
@@ -76,11 +91,34 @@ impl Lfsr {
     pub fn next_bit(&mut self) -> bool {
         let n = self.order;
         let out = self.state & 1 == 1;
-        let fb =
-            TAPS[(n - PRBS_MIN_ORDER) as usize].iter().fold(0, |acc, &t| acc ^ (self.state >> (n - t)) & 1);
+        let fb = self.taps.iter().fold(0, |acc, &t| acc ^ (self.state >> (n - t)) & 1);
         self.state = (self.state >> 1) | (fb << (n - 1));
         out
     }
+}
+
+/// Whether feedback `taps` on an order-`n` register cycle through all 2^n − 1 non-zero states.
+fn is_maximal(n: u32, taps: &[u32]) -> bool {
+    let period = (1u64 << n) - 1;
+    let mut state = 1u32;
+    for step in 1..=period {
+        let fb = taps.iter().fold(0, |acc, &t| acc ^ (state >> (n - t)) & 1);
+        state = (state >> 1) | (fb << (n - 1));
+        if state == 1 {
+            return step == period;
+        }
+    }
+    false
+}
+
+/// The `index`-th maximal-length feedback of order n other than the table's (index ≥ 1).
+fn maximal_taps(n: u32, index: usize) -> Option<Vec<u32>> {
+    let table = TAPS[(n - PRBS_MIN_ORDER) as usize];
+    let pairs = (1..n).rev().map(|k| vec![n, k]);
+    let quads = (1..n)
+        .rev()
+        .flat_map(move |a| (1..a).rev().flat_map(move |b| (1..b).rev().map(move |c| vec![n, a, b, c])));
+    pairs.chain(quads).filter(|t| t.as_slice() != table).filter(|t| is_maximal(n, t)).nth(index - 1)
 }
 
 /// A maximal-length PRBS: ±`amplitude`, each bit held for `clock` samples.
@@ -131,7 +169,12 @@ impl Prbs {
 
     /// `n` samples starting from a given register state (deterministic).
     pub fn generate_from_state(&self, n: usize, state: u32) -> Vec<f64> {
-        let mut lfsr = Lfsr::new(self.order, state).expect("order validated in Prbs::new");
+        let lfsr = Lfsr::new(self.order, state).expect("order validated in Prbs::new");
+        self.generate_from(lfsr, n)
+    }
+
+    /// `n` samples from a given register.
+    pub fn generate_from(&self, mut lfsr: Lfsr, n: usize) -> Vec<f64> {
         let mut out = Vec::with_capacity(n);
         while out.len() < n {
             let v = if lfsr.next_bit() { self.amplitude } else { -self.amplitude };
@@ -226,10 +269,12 @@ impl Excitation {
 
     /// `count` dithers of `n` samples each, one per MV.
     ///
-    /// For the PRBS all dithers are the one m-sequence of the order (a register has only one),
-    /// so they are started ⌊period/count⌋ bits apart from a seeded random state: any two are
-    /// then shifted copies at least that far apart and look independent at every lag an MI
-    /// profile examines. The other types draw independent sequences.
+    /// For the PRBS each MV gets a different m-sequence (the i-th maximal-length feedback
+    /// polynomial of the order) from a seeded random state. Shifted copies of one m-sequence
+    /// would not do for a nonlinear plant: by the shift-and-add property the product of two
+    /// shifts of an m-sequence is a third shift, so a quadratic mismatch on MV 1 puts an exact
+    /// copy of another MV's dither into the residual (measured: false CCF alarms on ud3 in the
+    /// continuous 2×3 case). The other types draw independent sequences.
     pub fn generate_many(
         self,
         n: usize,
@@ -244,16 +289,9 @@ impl Excitation {
             return Err(SimError::parameter("dither standard deviation", std, "must be positive and finite"));
         }
         let prbs = Prbs::new(Prbs::order_for(n), std, 1)?;
-        let spacing = prbs.period() / count.max(1);
-        let mut lfsr = Lfsr::new(prbs.order, rng.random::<u32>())?;
-        let mut out = Vec::with_capacity(count);
-        for _ in 0..count {
-            out.push(prbs.generate_from_state(n, lfsr.state()));
-            for _ in 0..spacing {
-                lfsr.next_bit();
-            }
-        }
-        Ok(out)
+        (0..count)
+            .map(|i| Ok(prbs.generate_from(Lfsr::with_polynomial(prbs.order, i, rng.random::<u32>())?, n)))
+            .collect()
     }
 
     /// `n` samples of zero mean and standard deviation `std`.
