@@ -142,18 +142,24 @@ pub fn mutual_information(x: &[f64], y: &[f64], opts: &MiOptions) -> Result<MiEs
     })
 }
 
-/// `v` divided by its (population) standard deviation when `on`; `v` itself otherwise.
-pub(crate) fn scaled(v: &[f64], on: bool) -> std::borrow::Cow<'_, [f64]> {
-    if !on {
-        return std::borrow::Cow::Borrowed(v);
+/// The standard deviation of `v`, computed on `v / max|v|` so that neither squares of huge
+/// values overflow nor squares of tiny ones underflow; `None` when it is zero or not finite.
+pub(crate) fn robust_std(v: &[f64]) -> Option<f64> {
+    let m = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
     }
     let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / n).sqrt();
-    if sd > 0.0 {
-        std::borrow::Cow::Owned(v.iter().map(|a| a / sd).collect())
-    } else {
-        std::borrow::Cow::Borrowed(v)
+    let mean = v.iter().map(|x| x / m).sum::<f64>() / n;
+    let sd = (v.iter().map(|x| (x / m - mean).powi(2)).sum::<f64>() / n).sqrt();
+    (sd > 0.0).then_some(sd * m).filter(|s| s.is_finite() && *s > 0.0)
+}
+
+/// `v` divided by its (population) standard deviation when `on`; `v` itself otherwise.
+pub(crate) fn scaled(v: &[f64], on: bool) -> std::borrow::Cow<'_, [f64]> {
+    match robust_std(v).filter(|_| on) {
+        Some(sd) => std::borrow::Cow::Owned(v.iter().map(|a| a / sd).collect()),
+        None => std::borrow::Cow::Borrowed(v),
     }
 }
 

@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use super::discrete::{Levels, ross_sorted};
-use super::estimator::{Estimator, MiOptions, mutual_information, scaled};
+use super::estimator::{Estimator, MiOptions, mutual_information, robust_std, scaled};
 use super::ksg::ksg1;
 use super::{InfoError, validate};
 
@@ -147,13 +147,7 @@ impl<'a> LaggedPair<'a> {
         };
         let continuous = matches!(path, Path::Continuous);
         let y = scaled(y, continuous && opts.standardize);
-        let x_scale = if continuous && opts.standardize {
-            let n = x.len() as f64;
-            let mean = x.iter().sum::<f64>() / n;
-            (x.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / n).sqrt()
-        } else {
-            1.0
-        };
+        let x_scale = if continuous && opts.standardize { robust_std(x).unwrap_or(1.0) } else { 1.0 };
         Ok(Self { x, y, x_scale, lags, width, k: opts.k, n_pairs, path })
     }
 
