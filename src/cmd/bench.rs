@@ -36,6 +36,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("  continuous estimate      {:>9.3} ms (median)", report.ksg_continuous_ms);
         println!("  iAAFT surrogate          {:>9.3} ms (median)", report.iaaft_ms);
         println!("  3x3 matrix, 20 lags, 100 surrogates  {:>9.1} ms", report.matrix_3x3_ms);
+        println!("  3x3 default analysis (joint, whitened, partialled)  {:>9.1} ms", report.analyze_3x3_ms);
     }
     Ok(())
 }
