@@ -147,7 +147,7 @@ fn analyze_prints_json_verdicts_and_writes_figures() {
         ch[0]["norm_mi_bits"].as_f64().unwrap() > ch[0]["threshold_bits"].as_f64().unwrap()
             || ch[0]["peak_lag"] == 1
     );
-    for name in ["mi_lags", "ccf_lags", "mi_matrix"] {
+    for name in ["mi_lags", "ccf_lags", "mi_matrix", "pair_ud1_e1_mi", "pair_ud1_e2_ccf"] {
         for ext in ["svg", "png"] {
             let f = figs.join(format!("{name}.{ext}"));
             let len = std::fs::metadata(&f).unwrap_or_else(|_| panic!("{} missing", f.display())).len();

@@ -4,7 +4,8 @@
 //!   critical value (the paper's Figures 3, 8, 10, 16), one panel per pair;
 //! * `ccf_lags`: the cross-correlation against lag with its ±z/√N limits (Figures 2, 9, 11, 17);
 //! * `mi_matrix`: the MI matrix as a heat map, each cell shaded by norm / critical value and
-//!   labelled with the norm in bits and the verdict.
+//!   labelled with the norm in bits and the verdict;
+//! * `pair_<mv>_<cv>_mi` and `pair_<mv>_<cv>_ccf`: the same two plots for each pair alone.
 //!
 //! PNG text is drawn with DejaVu Sans embedded in the binary, so no system font is needed.
 
@@ -87,7 +88,27 @@ pub fn write_matrix_figures(dir: &Path, m: &MatrixResult, units: Units) -> Resul
     files.extend(svg_and_png!(dir, "ccf_lags", panel, |root| draw_grid(root, m, units, Panel::Ccf))?);
     let heat = ((cols * 150 + 160).max(520), rows * 90 + 100);
     files.extend(svg_and_png!(dir, "mi_matrix", heat, |root| draw_heatmap(root, m, units))?);
+    for c in &m.cells {
+        let (mv, cv) = (&m.dithers[c.mv], &m.residuals[c.cv]);
+        let stem = format!("pair_{}_{}", file_safe(mv), file_safe(cv));
+        files.extend(svg_and_png!(dir, format!("{stem}_mi"), (560, 360), |root: &DrawingArea<_, Shift>| {
+            root.fill(&WHITE)?;
+            draw_mi_panel(root, c, mv, cv, units)
+        })?);
+        files.extend(svg_and_png!(dir, format!("{stem}_ccf"), (560, 360), |root: &DrawingArea<
+            _,
+            Shift,
+        >| {
+            root.fill(&WHITE)?;
+            draw_ccf_panel(root, c, mv, cv)
+        })?);
+    }
     Ok(files)
+}
+
+/// A signal name made safe for a file name.
+fn file_safe(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
 }
 
 #[derive(Clone, Copy)]
@@ -162,22 +183,32 @@ fn draw_mi_panel<DB: DrawingBackend>(
         .configure_mesh()
         .disable_mesh()
         .x_desc("lag")
-        .x_label_formatter(&|v| format!("{v:.0}"))
+        .x_label_formatter(&|v| if (v - v.round()).abs() < 1e-9 { format!("{v:.0}") } else { String::new() })
         .y_desc(format!("MI ({unit})"))
         .label_style((FONT, 10))
         .axis_desc_style((FONT, 11))
         .draw()?;
-    chart.draw_series(LineSeries::new(
-        t.lags.iter().zip(&t.lag_critical).map(|(&l, &v)| (l as f64, u(v))),
-        BLACK.stroke_width(1),
-    ))?;
-    chart.draw_series(LineSeries::new(
-        t.lags.iter().zip(&t.profile).map(|(&l, &v)| (l as f64, u(v))),
-        colour,
-    ))?;
+    chart
+        .draw_series(LineSeries::new(
+            t.lags.iter().zip(&t.lag_critical).map(|(&l, &v)| (l as f64, u(v))),
+            BLACK.stroke_width(1),
+        ))?
+        .label("critical value")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 14, y)], BLACK));
+    chart
+        .draw_series(LineSeries::new(t.lags.iter().zip(&t.profile).map(|(&l, &v)| (l as f64, u(v))), colour))?
+        .label("MI")
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 14, y)], colour));
     chart.draw_series(
         t.lags.iter().zip(&t.profile).map(|(&l, &v)| Circle::new((l as f64, u(v)), 3, colour.filled())),
     )?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font((FONT, 10))
+        .draw()?;
     Ok(())
 }
 
@@ -201,7 +232,7 @@ fn draw_ccf_panel<DB: DrawingBackend>(
         .configure_mesh()
         .disable_mesh()
         .x_desc("lag")
-        .x_label_formatter(&|v| format!("{v:.0}"))
+        .x_label_formatter(&|v| if (v - v.round()).abs() < 1e-9 { format!("{v:.0}") } else { String::new() })
         .y_desc("CCF")
         .label_style((FONT, 10))
         .axis_desc_style((FONT, 11))
