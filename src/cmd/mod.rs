@@ -2,5 +2,7 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod demo;
 pub mod mi;
+pub mod serve;
 pub mod simulate;
