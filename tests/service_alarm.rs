@@ -20,17 +20,18 @@ async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
     // Phase 1: the model leaves out ud1's effect on y1.
     let mut toy = Toy::new(11);
     let mut events: Vec<serde_json::Value> = Vec::new();
-    let raised = until("the alarm on ud1→y1", || {
-        let (pubs, alarms, toy, events) = (&pubs, &alarms, &mut toy, &mut events);
-        async move {
-            toy.publish(pubs, 50, false).await;
-            while let Ok(Some(s)) = alarms.try_recv() {
-                events.push(serde_json::from_slice(&s.payload().to_bytes()).unwrap());
-            }
-            events.iter().find(|e| e["event"] == "raise").cloned()
+    let deadline = tokio::time::Instant::now() + HANG_GUARD;
+    let raised = loop {
+        toy.publish(&pubs, 50, false).await;
+        while let Ok(Some(s)) = alarms.try_recv() {
+            events.push(serde_json::from_slice(&s.payload().to_bytes()).unwrap());
         }
-    })
-    .await;
+        if let Some(e) = events.iter().find(|e| e["event"] == "raise") {
+            break e.clone();
+        }
+        assert!(tokio::time::Instant::now() < deadline, "no alarm raised");
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    };
     assert_eq!(raised["channel"], "ud1→y1", "{raised}");
     assert_eq!(raised["mv"], "u1");
     assert_eq!(raised["cv"], "y1");
@@ -41,17 +42,17 @@ async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
     assert_eq!(st["active_alarms"], serde_json::json!(["ud1→y1"]));
 
     // Phase 2: the model is fixed; the window refills with clean residuals.
-    let cleared = until("the clear of ud1→y1", || {
-        let (pubs, alarms, toy, events) = (&pubs, &alarms, &mut toy, &mut events);
-        async move {
-            toy.publish(pubs, 50, true).await;
-            while let Ok(Some(s)) = alarms.try_recv() {
-                events.push(serde_json::from_slice(&s.payload().to_bytes()).unwrap());
-            }
-            events.iter().find(|e| e["event"] == "clear").cloned()
+    let cleared = loop {
+        toy.publish(&pubs, 50, true).await;
+        while let Ok(Some(s)) = alarms.try_recv() {
+            events.push(serde_json::from_slice(&s.payload().to_bytes()).unwrap());
         }
-    })
-    .await;
+        if let Some(e) = events.iter().find(|e| e["event"] == "clear") {
+            break e.clone();
+        }
+        assert!(tokio::time::Instant::now() < deadline, "the alarm never cleared");
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    };
     assert_eq!(cleared["channel"], "ud1→y1");
     for e in &events {
         assert_eq!(e["channel"], "ud1→y1", "an alarm on a channel whose model is right: {e}");
@@ -59,7 +60,8 @@ async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
     let (code, body) = get_json(HTTP, "/api/v1/controllers/c1/alarms").await;
     assert_eq!(code, 200);
     assert!(body["active"].as_array().unwrap().is_empty());
-    let kinds: Vec<&str> = body["history"].as_array().unwrap().iter().map(|e| e["event"].as_str().unwrap()).collect();
+    let kinds: Vec<&str> =
+        body["history"].as_array().unwrap().iter().map(|e| e["event"].as_str().unwrap()).collect();
     assert_eq!(kinds, vec!["raise", "clear"]);
     let (_, metrics) = get(HTTP, "/metrics").await;
     assert!(metrics.contains(r#"mpm_active_alarms{controller="c1"} 0"#), "{metrics}");

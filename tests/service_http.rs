@@ -72,11 +72,13 @@ async fn http_api_bodies_and_error_codes() {
     assert_eq!(m["status"], "ok");
     assert_eq!(m["n"], 300);
     assert_eq!(m["channels"].as_array().unwrap().len(), 4);
-    let ch = m["channels"].as_array().unwrap().iter().find(|c| c["dither"] == "ud1" && c["cv"] == "y1").unwrap();
+    let ch =
+        m["channels"].as_array().unwrap().iter().find(|c| c["dither"] == "ud1" && c["cv"] == "y1").unwrap();
     assert_eq!(ch["significant"], true, "{ch}");
     assert_eq!(ch["verdict"], "mismatch");
     assert!(ch["norm_bits"].as_f64().unwrap() > ch["critical_bits"].as_f64().unwrap());
-    let clean = m["channels"].as_array().unwrap().iter().find(|c| c["dither"] == "ud2" && c["cv"] == "y2").unwrap();
+    let clean =
+        m["channels"].as_array().unwrap().iter().find(|c| c["dither"] == "ud2" && c["cv"] == "y2").unwrap();
     assert_eq!(clean["significant"], false, "{clean}");
 
     for mv in ["u1", "ud1"] {

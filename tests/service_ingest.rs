@@ -21,20 +21,20 @@ async fn bad_payloads_are_counted_by_reason_and_survived() {
     let mut toy = Toy::new(3);
     toy.publish(&s, 50, true).await;
     let bad: &[(&str, &[u8])] = &[
-        ("mpm/c1/cv/y1", b"not json"),                        // bad_payload
-        ("mpm/c1/cv/y1", br#"{"v": 1}"#),                     // bad_payload (no t)
-        ("mpm/c1/cv/y1", br#"{"t": [1, 2], "v": [1]}"#),      // bad_payload (lengths)
-        ("mpm/c1/cv/y1", br#"{"t": "yesterday", "v": 1}"#),   // bad_payload (time)
-        ("mpm/c1/cv/y1", &[0xff, 0xfe, 0x00]),                // bad_payload (not UTF-8)
-        ("mpm/c1/cv/y1", br#"{"t": 60, "v": null}"#),         // non_finite
-        ("mpm/c1/cv/y1", br#"{"t": 61, "v": "NaN"}"#),        // non_finite
-        ("mpm/c1/cv/y1", br#"{"t": 62, "v": "-inf"}"#),       // non_finite
-        ("mpm/c1/cv/nosuch", br#"{"t": 60, "v": 1}"#),        // unknown_tag
-        ("mpm/c1/bogus/y1", br#"{"t": 60, "v": 1}"#),         // unknown_tag (role)
-        ("mpm/c1/cv/y1", br#"{"t": 70, "v": 1}"#),            // accepted (opens slot 70)
-        ("mpm/c1/cv/y1", br#"{"t": 70.2, "v": 2}"#),          // duplicate (snaps to slot 70)
-        ("mpm/c1/cv/y1", br#"{"t": 10, "v": 1}"#),            // out_of_order (row 10 closed)
-        ("mpm/c1/cv/y1", br#"{"t": -1000, "v": 1}"#),         // late (older than the window)
+        ("mpm/c1/cv/y1", b"not json"),                                 // bad_payload
+        ("mpm/c1/cv/y1", br#"{"v": 1}"#),                              // bad_payload (no t)
+        ("mpm/c1/cv/y1", br#"{"t": [1, 2], "v": [1]}"#),               // bad_payload (lengths)
+        ("mpm/c1/cv/y1", br#"{"t": "yesterday", "v": 1}"#),            // bad_payload (time)
+        ("mpm/c1/cv/y1", &[0xff, 0xfe, 0x00]),                         // bad_payload (not UTF-8)
+        ("mpm/c1/cv/y1", br#"{"t": 60, "v": null}"#),                  // non_finite
+        ("mpm/c1/cv/y1", br#"{"t": 61, "v": "NaN"}"#),                 // non_finite
+        ("mpm/c1/cv/y1", br#"{"t": 62, "v": "-inf"}"#),                // non_finite
+        ("mpm/c1/cv/nosuch", br#"{"t": 60, "v": 1}"#),                 // unknown_tag
+        ("mpm/c1/bogus/y1", br#"{"t": 60, "v": 1}"#),                  // unknown_tag (role)
+        ("mpm/c1/cv/y1", br#"{"t": 70, "v": 1}"#),                     // accepted (opens slot 70)
+        ("mpm/c1/cv/y1", br#"{"t": 70.2, "v": 2}"#),                   // duplicate (snaps to slot 70)
+        ("mpm/c1/cv/y1", br#"{"t": 10, "v": 1}"#),                     // out_of_order (row 10 closed)
+        ("mpm/c1/cv/y1", br#"{"t": -1000, "v": 1}"#),                  // late (older than the window)
         ("mpm/c1/cv/y1", br#"{"t": "1970-01-01T00:01:11Z", "v": 1}"#), // accepted: RFC 3339, slot 71
     ];
     for (key, payload) in bad {

@@ -123,7 +123,8 @@ async fn demo(args: Args, cfg: Config) -> anyhow::Result<()> {
     println!("  watch: the alarm must rise on ud1→y1 and ud1→y2 (u1's channels) and on no other channel");
 
     let mut zc = zenoh::Config::default();
-    let set = |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow::anyhow!("{e}"));
+    let set =
+        |c: &mut zenoh::Config, k: &str, v: &str| c.insert_json5(k, v).map_err(|e| anyhow::anyhow!("{e}"));
     set(&mut zc, "mode", "\"peer\"")?;
     set(&mut zc, "scouting/multicast/enabled", "false")?;
     set(&mut zc, "listen/endpoints", "[]")?;
@@ -141,7 +142,11 @@ async fn demo(args: Args, cfg: Config) -> anyhow::Result<()> {
         while let Ok(s) = alarms.recv_async().await {
             let text = s.payload().try_to_string().map(|t| t.to_string()).unwrap_or_default();
             let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
-            let since = sw.lock().ok().and_then(|g| *g).map(|t| format!(", {:.0} s after the switch", t.elapsed().as_secs_f64()));
+            let since = sw
+                .lock()
+                .ok()
+                .and_then(|g| *g)
+                .map(|t| format!(", {:.0} s after the switch", t.elapsed().as_secs_f64()));
             println!(
                 "[{:>5.1} s] ALARM {} on {}: {} {:.4} bits > critical {:.4} bits, verdict {}{}",
                 started.elapsed().as_secs_f64(),
@@ -177,11 +182,19 @@ async fn demo(args: Args, cfg: Config) -> anyhow::Result<()> {
         if s.k == args.switch_at {
             plant.mismatched = true;
             *switch_wall.lock().unwrap_or_else(|e| e.into_inner()) = Some(Instant::now());
-            println!("[{:>5.1} s] sample {}: the plant changes, a: 0.2 → 0.8", started.elapsed().as_secs_f64(), s.k);
+            println!(
+                "[{:>5.1} s] sample {}: the plant changes, a: 0.2 → 0.8",
+                started.elapsed().as_secs_f64(),
+                s.k
+            );
         }
         if args.fix_at == Some(s.k) {
             plant.mismatched = false;
-            println!("[{:>5.1} s] sample {}: the plant is back to a = 0.2", started.elapsed().as_secs_f64(), s.k);
+            println!(
+                "[{:>5.1} s] sample {}: the plant is back to a = 0.2",
+                started.elapsed().as_secs_f64(),
+                s.k
+            );
         }
         let t = s.k as f64;
         let mut puts = Vec::with_capacity(10);
@@ -213,8 +226,12 @@ fn print_progress(service: &Service, started: Instant, k: usize, mismatched: boo
     let run = match &c.latest {
         None => "no run yet".to_string(),
         Some(r) if r.status == RunStatus::Ok => {
-            let sig: Vec<String> =
-                r.channels.iter().filter(|ch| ch.significant).map(|ch| format!("{}→{}", ch.dither, ch.cv)).collect();
+            let sig: Vec<String> = r
+                .channels
+                .iter()
+                .filter(|ch| ch.significant)
+                .map(|ch| format!("{}→{}", ch.dither, ch.cv))
+                .collect();
             format!(
                 "last run {:.2} s on {} samples, significant: {}",
                 r.duration_s,

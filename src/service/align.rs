@@ -30,14 +30,8 @@ pub enum DropReason {
 
 impl DropReason {
     /// Every reason, for metrics that must show zeros too.
-    pub const ALL: [DropReason; 6] = [
-        Self::BadPayload,
-        Self::UnknownTag,
-        Self::NonFinite,
-        Self::Duplicate,
-        Self::OutOfOrder,
-        Self::Late,
-    ];
+    pub const ALL: [DropReason; 6] =
+        [Self::BadPayload, Self::UnknownTag, Self::NonFinite, Self::Duplicate, Self::OutOfOrder, Self::Late];
 
     /// The metric label.
     pub fn as_str(self) -> &'static str {
@@ -214,7 +208,14 @@ impl Residuals {
 
     /// From a nominal model simulated on the MVs; holds MVs over gaps up to `max_hold` slots.
     pub fn from_model(layout: Layout, model: MimoModel, max_hold: usize) -> Self {
-        Self { layout, model: Some(model), state: None, last_slot: None, last_u: Vec::new(), max_hold: max_hold as i64 }
+        Self {
+            layout,
+            model: Some(model),
+            state: None,
+            last_slot: None,
+            last_u: Vec::new(),
+            max_hold: max_hold as i64,
+        }
     }
 
     /// The columns a complete row needs.

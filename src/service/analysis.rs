@@ -119,7 +119,12 @@ pub fn options(c: &ControllerConfig) -> MatrixOptions {
     MatrixOptions {
         lags: LagChoice::Fixed(Lags { min: c.lag_min, max: c.lag_max }),
         mi: MiOptions::with_k(c.k),
-        surrogates: SurrogateOptions { count: c.surrogates, z: c.sigma, seed: c.seed, ..SurrogateOptions::default() },
+        surrogates: SurrogateOptions {
+            count: c.surrogates,
+            z: c.sigma,
+            seed: c.seed,
+            ..SurrogateOptions::default()
+        },
         joint_embedding: c.joint_embedding,
         ccf_z: 1.96,
     }

@@ -408,7 +408,9 @@ impl ControllerConfig {
             }
             ResidualSource::Model => {
                 if self.model.is_empty() {
-                    p.push(format!("{key}.model: residual = \"model\" needs at least one [[controller.model]]"));
+                    p.push(format!(
+                        "{key}.model: residual = \"model\" needs at least one [[controller.model]]"
+                    ));
                 }
                 for (m, ch) in self.model.iter().enumerate() {
                     let mkey = format!("{key}.model[{m}]");
@@ -452,7 +454,10 @@ impl ControllerConfig {
             p.push(format!("{key}.k: must be at least 1"));
         }
         if self.surrogates < 2 {
-            p.push(format!("{key}.surrogates: {} must be at least 2 (30 or more is sensible)", self.surrogates));
+            p.push(format!(
+                "{key}.surrogates: {} must be at least 2 (30 or more is sensible)",
+                self.surrogates
+            ));
         }
         if !(self.sigma.is_finite() && self.sigma > 0.0) {
             p.push(format!("{key}.sigma: {} must be positive", self.sigma));
@@ -562,7 +567,8 @@ surrogates = 1
 
     #[test]
     fn unknown_keys_are_named() {
-        let Err(ConfigError::Parse { message, .. }) = Config::parse(&format!("{GOOD}windw = 3\n"), "t") else {
+        let Err(ConfigError::Parse { message, .. }) = Config::parse(&format!("{GOOD}windw = 3\n"), "t")
+        else {
             panic!()
         };
         assert!(message.contains("windw"), "{message}");

@@ -105,8 +105,22 @@ impl Controller {
         })
     }
 
-    /// Decodes and aligns one message on `<role>/<tag>`.
+    /// Decodes and aligns one message on `<role>/<tag>`, and counts what it did.
     pub fn ingest(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
+        let out = self.ingest_uncounted(role, tag, bytes);
+        self.ingested += out.accepted;
+        for (r, n) in &out.dropped {
+            *self.dropped.entry(*r).or_default() += n;
+        }
+        out
+    }
+
+    /// Counts drops decided outside [`Controller::ingest`] (a key of the wrong shape).
+    pub fn count_drop(&mut self, reason: DropReason, n: u64) {
+        *self.dropped.entry(reason).or_default() += n;
+    }
+
+    fn ingest_uncounted(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
         let mut out = IngestOutcome::default();
         let samples = match payload::decode(bytes) {
             Ok(s) => s,
@@ -137,10 +151,6 @@ impl Controller {
             if let Some(w) = self.residuals.process(row) {
                 self.push_row(w);
             }
-        }
-        self.ingested += out.accepted;
-        for (r, n) in &out.dropped {
-            *self.dropped.entry(*r).or_default() += n;
         }
         out
     }
@@ -280,5 +290,7 @@ tolerance = 2
         assert_eq!(o.accepted, 1);
         assert_eq!(o.dropped, vec![(DropReason::NonFinite, 1), (DropReason::OutOfOrder, 1)]);
         assert_eq!(c.ingested, 31);
+        assert_eq!(c.dropped[&DropReason::UnknownTag], 1);
+        assert_eq!(c.dropped[&DropReason::BadPayload], 1);
     }
 }

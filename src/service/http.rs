@@ -51,7 +51,11 @@ pub fn router(shared: Arc<Shared>) -> Router {
 }
 
 /// Serves until `stop`.
-pub fn spawn(shared: Arc<Shared>, listener: tokio::net::TcpListener, mut stop: watch::Receiver<bool>) -> JoinHandle<()> {
+pub fn spawn(
+    shared: Arc<Shared>,
+    listener: tokio::net::TcpListener,
+    mut stop: watch::Receiver<bool>,
+) -> JoinHandle<()> {
     tokio::spawn(async move {
         let app = router(shared);
         let res = axum::serve(listener, app)
@@ -155,7 +159,10 @@ async fn controllers(State(s): State<AppState>) -> Json<Vec<ControllerStatus>> {
     Json(s.controllers.keys().filter_map(|id| status(&s, id)).collect())
 }
 
-async fn controller(State(s): State<AppState>, Path(id): Path<String>) -> Result<Json<ControllerStatus>, ApiError> {
+async fn controller(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<ControllerStatus>, ApiError> {
     status(&s, &id).map(Json).ok_or_else(|| unknown(&id))
 }
 
@@ -178,11 +185,9 @@ async fn alarms(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let limit = match q.get("limit") {
         None => 100,
-        Some(v) => v
-            .parse::<usize>()
-            .ok()
-            .filter(|&n| (1..=10_000).contains(&n))
-            .ok_or_else(|| ApiError(StatusCode::BAD_REQUEST, format!("limit {v:?} must be an integer in 1..=10000")))?,
+        Some(v) => v.parse::<usize>().ok().filter(|&n| (1..=10_000).contains(&n)).ok_or_else(|| {
+            ApiError(StatusCode::BAD_REQUEST, format!("limit {v:?} must be an integer in 1..=10000"))
+        })?,
     };
     let (active, memory) = {
         let c = s.lock(&id).ok_or_else(|| unknown(&id))?;
@@ -212,7 +217,10 @@ async fn profile(
 ) -> Result<Response, ApiError> {
     let latest = s.lock(&id).ok_or_else(|| unknown(&id))?.latest.clone();
     let (Some(mv), Some(cv)) = (q.get("mv"), q.get("cv")) else {
-        return Err(ApiError(StatusCode::BAD_REQUEST, "query parameters mv and cv are required (tags)".into()));
+        return Err(ApiError(
+            StatusCode::BAD_REQUEST,
+            "query parameters mv and cv are required (tags)".into(),
+        ));
     };
     let (mvs, cvs) = {
         let c = s.lock(&id).ok_or_else(|| unknown(&id))?;
@@ -224,17 +232,27 @@ async fn profile(
     if !cvs.contains(cv) {
         return Err(not_found(format!("controller {id:?} has no CV tag {cv:?}")));
     }
-    let r = latest.ok_or_else(|| ApiError(StatusCode::SERVICE_UNAVAILABLE, format!("no analysis of {id:?} has run yet")))?;
+    let r = latest.ok_or_else(|| {
+        ApiError(StatusCode::SERVICE_UNAVAILABLE, format!("no analysis of {id:?} has run yet"))
+    })?;
     if r.status != RunStatus::Ok {
         return Err(ApiError(
             StatusCode::SERVICE_UNAVAILABLE,
-            format!("the last run of {id:?} was {}: {}", r.status.as_str(), r.message.clone().unwrap_or_default()),
+            format!(
+                "the last run of {id:?} was {}: {}",
+                r.status.as_str(),
+                r.message.clone().unwrap_or_default()
+            ),
         ));
     }
     let ch = r.channel(mv, cv).ok_or_else(|| {
-        ApiError(StatusCode::SERVICE_UNAVAILABLE, format!("{mv}→{cv} was not tested in the last run (dither not excited)"))
+        ApiError(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("{mv}→{cv} was not tested in the last run (dither not excited)"),
+        )
     })?;
-    let p = analysis::profile(&r, ch)
-        .ok_or_else(|| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "profile missing from the last run".into()))?;
+    let p = analysis::profile(&r, ch).ok_or_else(|| {
+        ApiError(StatusCode::INTERNAL_SERVER_ERROR, "profile missing from the last run".into())
+    })?;
     Ok(Json(p).into_response())
 }

@@ -46,6 +46,7 @@ pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
             let mut o = super::controller::IngestOutcome::default();
             o.dropped.push((super::align::DropReason::UnknownTag, 1));
             o.problem = Some(format!("key {key} is not <prefix>/{id}/<mv|dither|cv|pred>/<tag>"));
+            ctl.count_drop(super::align::DropReason::UnknownTag, 1);
             o
         }
     };
@@ -55,7 +56,9 @@ pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
     let m = &shared.metrics;
     m.ingested.get_or_create(&labels).inc_by(outcome.accepted);
     for (r, n) in &outcome.dropped {
-        m.dropped.get_or_create(&DropLabels { controller: id.to_string(), reason: r.as_str().into() }).inc_by(*n);
+        m.dropped
+            .get_or_create(&DropLabels { controller: id.to_string(), reason: r.as_str().into() })
+            .inc_by(*n);
     }
     m.window_fill.get_or_create(&labels).set(fill);
     m.window_contiguous.get_or_create(&labels).set(contiguous as i64);

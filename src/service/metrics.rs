@@ -119,25 +119,49 @@ impl Metrics {
             active_alarms: Family::default(),
             registry: Registry::default(),
         };
-        registry.register("mpm_norm_mi_bits", "Norm of MI (eq 19) of dither and residual, bits", m.norm_mi.clone());
+        registry.register(
+            "mpm_norm_mi_bits",
+            "Norm of MI (eq 19) of dither and residual, bits",
+            m.norm_mi.clone(),
+        );
         registry.register(
             "mpm_critical_bits",
             "Surrogate critical value mu + z sigma of the norm of MI, bits",
             m.critical.clone(),
         );
-        registry.register("mpm_significant", "1 when the channel was significant in the last run", m.significant.clone());
-        registry.register("mpm_alarm_active", "1 while the channel's mismatch alarm is raised", m.alarm.clone());
+        registry.register(
+            "mpm_significant",
+            "1 when the channel was significant in the last run",
+            m.significant.clone(),
+        );
+        registry.register(
+            "mpm_alarm_active",
+            "1 while the channel's mismatch alarm is raised",
+            m.alarm.clone(),
+        );
         registry.register("mpm_verdict", "1 for the channel's current verdict", m.verdict.clone());
         registry.register("mpm_samples_ingested", "Samples accepted onto the grid", m.ingested.clone());
         registry.register("mpm_samples_dropped", "Samples dropped, by reason", m.dropped.clone());
-        registry.register("mpm_window_fill_ratio", "Rows in the window over its length", m.window_fill.clone());
+        registry.register(
+            "mpm_window_fill_ratio",
+            "Rows in the window over its length",
+            m.window_fill.clone(),
+        );
         registry.register(
             "mpm_window_contiguous_samples",
             "Contiguous rows at the end of the window (what the next run uses)",
             m.window_contiguous.clone(),
         );
-        registry.register("mpm_last_run_duration_seconds", "Wall time of the last analysis", m.run_duration.clone());
-        registry.register("mpm_last_run_timestamp_seconds", "Unix time of the last analysis", m.run_time.clone());
+        registry.register(
+            "mpm_last_run_duration_seconds",
+            "Wall time of the last analysis",
+            m.run_duration.clone(),
+        );
+        registry.register(
+            "mpm_last_run_timestamp_seconds",
+            "Unix time of the last analysis",
+            m.run_time.clone(),
+        );
         registry.register("mpm_runs", "Analyses by status", m.runs.clone());
         registry.register("mpm_active_alarms", "Channels whose alarm is raised", m.active_alarms.clone());
         Self { registry, ..m }
@@ -148,7 +172,9 @@ impl Metrics {
         let c = ControllerLabels { controller: controller.to_string() };
         let _ = self.ingested.get_or_create(&c);
         for r in crate::service::align::DropReason::ALL {
-            let _ = self.dropped.get_or_create(&DropLabels { controller: controller.to_string(), reason: r.as_str().into() });
+            let _ = self
+                .dropped
+                .get_or_create(&DropLabels { controller: controller.to_string(), reason: r.as_str().into() });
         }
         let _ = self.active_alarms.get_or_create(&c);
         let _ = self.window_fill.get_or_create(&c);

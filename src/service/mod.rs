@@ -165,10 +165,18 @@ impl Service {
             }
             controllers.insert(c.id.clone(), Mutex::new(ctl));
         }
-        let session = zenoh::open(zenoh_config(&config.zenoh)?).await.map_err(|e| ServiceError::Zenoh(e.to_string()))?;
+        let session = zenoh::open(zenoh_config(&config.zenoh)?)
+            .await
+            .map_err(|e| ServiceError::Zenoh(e.to_string()))?;
         let bind = config.http.bind.clone();
-        let shared =
-            Arc::new(Shared { config, controllers, metrics: Metrics::new(), store, session, started: Instant::now() });
+        let shared = Arc::new(Shared {
+            config,
+            controllers,
+            metrics: Metrics::new(),
+            store,
+            session,
+            started: Instant::now(),
+        });
         for id in shared.controllers.keys() {
             shared.metrics.init(id);
         }

@@ -115,7 +115,9 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<Sample>, PayloadError> {
 
 fn time(t: &Value) -> Result<f64, PayloadError> {
     match t {
-        Value::Number(n) => n.as_f64().filter(|x| x.is_finite()).ok_or_else(|| PayloadError::Time(t.to_string())),
+        Value::Number(n) => {
+            n.as_f64().filter(|x| x.is_finite()).ok_or_else(|| PayloadError::Time(t.to_string()))
+        }
         Value::String(s) => rfc3339(s).ok_or_else(|| PayloadError::Time(t.to_string())),
         _ => Err(PayloadError::Time(t.to_string())),
     }

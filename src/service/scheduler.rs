@@ -51,7 +51,11 @@ pub async fn run_once(shared: &Arc<Shared>, id: &str) -> Option<Arc<RunReport>> 
             let t = time.clone();
             let joined = tokio::task::spawn_blocking(move || analysis::run(&c, &snap, t)).await;
             let mut r = joined.unwrap_or_else(|e| {
-                let mut r = RunReport::insufficient(&cfg, super::window::Insufficient { contiguous: 0, needed: 0 }, time);
+                let mut r = RunReport::insufficient(
+                    &cfg,
+                    super::window::Insufficient { contiguous: 0, needed: 0 },
+                    time,
+                );
                 r.status = RunStatus::Error;
                 r.message = Some(format!("analysis failed: {e}"));
                 r
@@ -66,8 +70,11 @@ pub async fn run_once(shared: &Arc<Shared>, id: &str) -> Option<Arc<RunReport>> 
         ctl.running = false;
         ctl.latest = Some(report.clone());
         let events = ctl.apply(&report);
-        let active: Vec<(usize, usize, bool)> =
-            report.channels.iter().map(|ch| (ch.mv_index, ch.cv_index, ctl.alarm_active(ch.mv_index, ch.cv_index))).collect();
+        let active: Vec<(usize, usize, bool)> = report
+            .channels
+            .iter()
+            .map(|ch| (ch.mv_index, ch.cv_index, ctl.alarm_active(ch.mv_index, ch.cv_index)))
+            .collect();
         (events, active)
     };
     record_metrics(shared, &report, &active);
@@ -86,7 +93,9 @@ pub async fn run_once(shared: &Arc<Shared>, id: &str) -> Option<Arc<RunReport>> 
 fn record_metrics(shared: &Shared, r: &RunReport, active: &[(usize, usize, bool)]) {
     let m = &shared.metrics;
     let c = ControllerLabels { controller: r.controller.clone() };
-    m.runs.get_or_create(&RunLabels { controller: r.controller.clone(), status: r.status.as_str().into() }).inc();
+    m.runs
+        .get_or_create(&RunLabels { controller: r.controller.clone(), status: r.status.as_str().into() })
+        .inc();
     m.run_duration.get_or_create(&c).set(r.duration_s);
     m.run_time.get_or_create(&c).set(chrono::Utc::now().timestamp_millis() as f64 / 1000.0);
     m.active_alarms.get_or_create(&c).set(active.iter().filter(|a| a.2).count() as i64);
@@ -129,7 +138,8 @@ async fn publish(shared: &Arc<Shared>, id: &str, report: &RunReport, events: &[A
         && !events.is_empty()
     {
         let events = events.to_vec();
-        let res = tokio::task::spawn_blocking(move || events.iter().try_for_each(|e| store.append_alarm(e))).await;
+        let res =
+            tokio::task::spawn_blocking(move || events.iter().try_for_each(|e| store.append_alarm(e))).await;
         if let Ok(Err(e)) = res {
             tracing::warn!("alarm history not stored: {e}");
         }

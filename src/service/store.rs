@@ -71,7 +71,12 @@ impl Store {
     }
 
     /// Writes rows and forgets rows of `controller` older than `keep_from` slot, in one transaction.
-    pub fn save_rows(&self, controller: &str, rows: &[WindowRow], keep_from: Option<i64>) -> Result<(), StoreError> {
+    pub fn save_rows(
+        &self,
+        controller: &str,
+        rows: &[WindowRow],
+        keep_from: Option<i64>,
+    ) -> Result<(), StoreError> {
         let mut conn = self.conn();
         let tx = conn.transaction()?;
         {
@@ -89,7 +94,10 @@ impl Store {
                 ])?;
             }
             if let Some(k) = keep_from {
-                tx.execute("DELETE FROM samples WHERE controller = ?1 AND slot < ?2", params![controller, k])?;
+                tx.execute(
+                    "DELETE FROM samples WHERE controller = ?1 AND slot < ?2",
+                    params![controller, k],
+                )?;
             }
         }
         tx.commit()?;
@@ -104,13 +112,25 @@ impl Store {
         )?;
         let raw = q
             .query_map(params![controller, limit as i64], |r| {
-                Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?, r.get::<_, String>(2)?, r.get::<_, String>(3)?, r.get::<_, String>(4)?))
+                Ok((
+                    r.get::<_, i64>(0)?,
+                    r.get::<_, String>(1)?,
+                    r.get::<_, String>(2)?,
+                    r.get::<_, String>(3)?,
+                    r.get::<_, String>(4)?,
+                ))
             })?
             .collect::<Result<Vec<_>, _>>()?;
         let mut rows = raw
             .into_iter()
             .map(|(slot, mv, d, cv, e)| {
-                Ok(WindowRow { slot, mv: decode(&mv)?, dither: decode(&d)?, cv: decode(&cv)?, residual: decode(&e)? })
+                Ok(WindowRow {
+                    slot,
+                    mv: decode(&mv)?,
+                    dither: decode(&d)?,
+                    cv: decode(&cv)?,
+                    residual: decode(&e)?,
+                })
             })
             .collect::<Result<Vec<_>, StoreError>>()?;
         rows.reverse();
@@ -129,8 +149,11 @@ impl Store {
     /// The newest `limit` alarm events of `controller`, oldest first.
     pub fn alarms(&self, controller: &str, limit: usize) -> Result<Vec<AlarmEvent>, StoreError> {
         let conn = self.conn();
-        let mut q = conn.prepare("SELECT json FROM alarms WHERE controller = ?1 ORDER BY id DESC LIMIT ?2")?;
-        let raw = q.query_map(params![controller, limit as i64], |r| r.get::<_, String>(0))?.collect::<Result<Vec<_>, _>>()?;
+        let mut q =
+            conn.prepare("SELECT json FROM alarms WHERE controller = ?1 ORDER BY id DESC LIMIT ?2")?;
+        let raw = q
+            .query_map(params![controller, limit as i64], |r| r.get::<_, String>(0))?
+            .collect::<Result<Vec<_>, _>>()?;
         let mut v = raw.iter().map(|s| serde_json::from_str(s)).collect::<Result<Vec<AlarmEvent>, _>>()?;
         v.reverse();
         Ok(v)
@@ -144,7 +167,9 @@ impl Store {
              AND id = (SELECT MAX(id) FROM alarms b WHERE b.controller = a.controller AND b.dither = a.dither AND b.cv = a.cv)",
         )?;
         let rows = q
-            .query_map(params![controller], |r| Ok((r.get::<_, String>(0)?, r.get::<_, String>(1)?, r.get::<_, String>(2)?)))?
+            .query_map(params![controller], |r| {
+                Ok((r.get::<_, String>(0)?, r.get::<_, String>(1)?, r.get::<_, String>(2)?))
+            })?
             .collect::<Result<Vec<_>, _>>()?;
         Ok(rows.into_iter().filter(|(_, _, e)| e == "raise").map(|(d, c, _)| (d, c)).collect())
     }

@@ -120,7 +120,13 @@ mod tests {
     use super::*;
 
     fn row(slot: i64) -> WindowRow {
-        WindowRow { slot, mv: vec![0.0], dither: vec![slot as f64], cv: vec![0.0], residual: vec![-(slot as f64)] }
+        WindowRow {
+            slot,
+            mv: vec![0.0],
+            dither: vec![slot as f64],
+            cv: vec![0.0],
+            residual: vec![-(slot as f64)],
+        }
     }
 
     #[test]

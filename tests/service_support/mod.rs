@@ -10,12 +10,13 @@ use rand_chacha::ChaCha8Rng;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
 /// A guard against hangs only (never a performance assertion): generous on a loaded machine.
-pub const HANG_GUARD: Duration = Duration::from_secs(600);
+pub const HANG_GUARD: Duration = Duration::from_secs(240);
 
 /// A two-MV, two-CV controller `c1` on the given ports. `extra` is appended to the controller
 /// table (e.g. `every = 0.3`).
 pub fn config_text(zenoh_port: u16, http_port: u16, store: Option<&std::path::Path>, extra: &str) -> String {
-    let store = store.map(|p| format!("[store]\npath = {:?}\nflush_interval_ms = 100\n", p.display().to_string()));
+    let store =
+        store.map(|p| format!("[store]\npath = {:?}\nflush_interval_ms = 100\n", p.display().to_string()));
     format!(
         r#"
 prefix = "mpm"
@@ -71,7 +72,11 @@ pub async fn get(port: u16, path: &str) -> (u16, String) {
     let text = String::from_utf8_lossy(&buf).to_string();
     let status: u16 = text.split_whitespace().nth(1).and_then(|c| c.parse().ok()).expect("status line");
     let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
-    let body = if head.to_ascii_lowercase().contains("transfer-encoding: chunked") { dechunk(body) } else { body.into() };
+    let body = if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
+        dechunk(body)
+    } else {
+        body.into()
+    };
     (status, body)
 }
 
