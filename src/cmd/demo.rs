@@ -18,7 +18,7 @@ WHAT YOU SEE
   under its linear MPC, with ±1 PRBS dithers ud1..ud3 on the three MVs, runs sample by sample
   and publishes on zenoh, in accelerated time (--rate samples per second), to
   mpm/c2x3/{mv,dither,cv,pred}/<tag>. The monitor in the same process subscribes, aligns,
-  and every 3 s computes the MI matrix of the dithers against the residuals e = y − yhat of
+  and every 3 s computes, on the newest 2048 samples, the MI matrix of the dithers against the residuals e = y − yhat of
   y1 and y2. At sample --switch-at the plant's a jumps to 0.8 (the paper's mismatch): only
   u1's submodels are now wrong, so the alarm must rise on ud1→y1 and ud1→y2 and nowhere else.
   With --fix-at the plant returns to a = 0.2 and the alarms clear.
@@ -42,10 +42,10 @@ pub struct Args {
     #[arg(long, default_value_t = 7447)]
     pub zenoh_port: u16,
     /// Plant samples published per wall-clock second (the plant's period is 1 s).
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, default_value_t = 100.0)]
     pub rate: f64,
     /// Sample at which the plant changes (a: 0.2 → 0.8).
-    #[arg(long, default_value_t = 1200)]
+    #[arg(long, default_value_t = 2500)]
     pub switch_at: usize,
     /// Sample at which the plant returns to the model (a = 0.2); never by default.
     #[arg(long)]
@@ -84,15 +84,16 @@ dither = ["ud1", "ud2", "ud3"]
 cv = ["y1", "y2"]
 pred = ["yhat1", "yhat2"]
 residual = "pred"
-window = 800
-min_samples = 400
+window = 2048
+min_samples = 1024
 lag_min = 1
-lag_max = 10
+lag_max = 5
 surrogates = 40
 sigma = 6.0
 every = 3.0
+tolerance = 10
 raise_after = 2
-clear_after = 2
+clear_after = 3
 "#,
         port = args.zenoh_port,
         http = args.http,
@@ -147,13 +148,15 @@ async fn demo(args: Args, cfg: Config) -> anyhow::Result<()> {
                 .ok()
                 .and_then(|g| *g)
                 .map(|t| format!(", {:.0} s after the switch", t.elapsed().as_secs_f64()));
+            let event = v["event"].as_str().unwrap_or("?");
             println!(
-                "[{:>5.1} s] ALARM {} on {}: {} {:.4} bits > critical {:.4} bits, verdict {}{}",
+                "[{:>5.1} s] ALARM {} on {}: {} {:.4} bits {} critical {:.4} bits, verdict {}{}",
                 started.elapsed().as_secs_f64(),
-                v["event"].as_str().unwrap_or("?").to_uppercase(),
+                event.to_uppercase(),
                 v["channel"].as_str().unwrap_or("?"),
                 v["statistic"].as_str().unwrap_or("?"),
                 v["value_bits"].as_f64().unwrap_or(f64::NAN),
+                if event == "raise" { ">" } else { "vs" },
                 v["critical_bits"].as_f64().unwrap_or(f64::NAN),
                 v["verdict"].as_str().unwrap_or("?"),
                 since.unwrap_or_default()
