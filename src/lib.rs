@@ -13,6 +13,7 @@
 //! * [`sim`]: the paper's plants, controllers and dither generators. Pure and seeded.
 //! * [`io`]: the time-aligned data table and its CSV form.
 //! * [`benchmark`]: timings of the core behind `mpmwatch bench`.
+//! * [`service`]: the online monitor behind `mpmwatch serve` and `mpmwatch demo`.
 
 pub mod benchmark;
 pub mod detect;
@@ -20,4 +21,5 @@ pub mod info;
 pub mod io;
 pub mod model;
 pub mod report;
+pub mod service;
 pub mod sim;

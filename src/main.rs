@@ -63,6 +63,22 @@ enum Verb {
     Bench(cmd::bench::Args),
     /// Simulate one of the paper's plants and write its CSV (see `simulate --help`).
     Simulate(cmd::simulate::Args),
+    /// The online monitor: zenoh in; alarms, the MI matrix, metrics and an HTTP API out.
+    ///
+    /// Subscribes to <prefix>/<controller>/{mv,dither,cv,pred}/<tag>, aligns the samples on each
+    /// controller's grid, analyses a bounded window on a schedule and raises debounced alarms
+    /// per MV→CV channel. See `serve --help` and config/default.toml.
+    ///
+    /// Example: mpmwatch serve --config config/examples/continuous2x3.toml
+    Serve(cmd::serve::Args),
+    /// One-command demo: a simulated MPC loop publishing into the monitor, and the status page.
+    ///
+    /// Starts an embedded zenoh peer on loopback, the monitor with its HTTP page, and the
+    /// paper's continuous 2×3 plant in accelerated time; after a while the plant changes
+    /// (a: 0.2 → 0.8) and the alarm rises on u1's channels. Prints the URL and what to watch.
+    ///
+    /// Example: cargo run --release -- demo
+    Demo(cmd::demo::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -73,5 +89,7 @@ fn main() -> anyhow::Result<()> {
         Verb::Analyze(args) => cmd::analyze::run(args),
         Verb::Reproduce(args) => cmd::reproduce::run(args),
         Verb::Simulate(args) => cmd::simulate::run(args),
+        Verb::Serve(args) => cmd::serve::run(args),
+        Verb::Demo(args) => cmd::demo::run(args),
     }
 }

@@ -2,6 +2,8 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod demo;
 pub mod mi;
 pub mod reproduce;
+pub mod serve;
 pub mod simulate;

@@ -1,0 +1,606 @@
+//! The service's TOML configuration (`config/default.toml` documents every key) and its
+//! validation. Validation collects every problem, each naming its key, so that an operator fixes
+//! a bad file in one pass instead of one error per restart.
+
+use std::collections::HashSet;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::model::{DiscreteTf, Hammerstein, MimoModel, StaticMap};
+
+/// A configuration that could not be read or that failed validation.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("cannot read config {path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// TOML syntax, a wrong type or an unknown key (the message names it).
+    #[error("config {path}: {message}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// toml's message, with the line and the key.
+        message: String,
+    },
+    /// Semantic problems, one line each.
+    #[error("config {path} has {} problem(s):\n{}", .problems.len(), .problems.join("\n"))]
+    Invalid {
+        /// The file.
+        path: String,
+        /// One message per problem, each starting with the key.
+        problems: Vec<String>,
+    },
+}
+
+/// The whole service configuration.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// First segment of every key expression (`<prefix>/<controller>/...`).
+    #[serde(default = "default_prefix")]
+    pub prefix: String,
+    /// How the zenoh session is opened.
+    #[serde(default)]
+    pub zenoh: ZenohConfig,
+    /// The HTTP API.
+    #[serde(default)]
+    pub http: HttpConfig,
+    /// The SQLite store.
+    #[serde(default)]
+    pub store: StoreConfig,
+    /// The monitored controllers (`[[controller]]` tables).
+    #[serde(default, rename = "controller")]
+    pub controllers: Vec<ControllerConfig>,
+}
+
+fn default_prefix() -> String {
+    "mpm".into()
+}
+
+/// Zenoh session settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ZenohConfig {
+    /// `peer` (embedded, the default), `client` (through a router) or `router`.
+    #[serde(default = "default_mode")]
+    pub mode: String,
+    /// Endpoints to listen on, e.g. `tcp/127.0.0.1:7447`.
+    #[serde(default)]
+    pub listen: Vec<String>,
+    /// Endpoints to connect to (a router or peers).
+    #[serde(default)]
+    pub connect: Vec<String>,
+    /// Multicast scouting: find peers on the LAN without `connect`. Off by default, so a
+    /// monitor only talks to the endpoints it is told.
+    #[serde(default)]
+    pub multicast_scouting: bool,
+    /// A full zenoh configuration file (JSON5) for TLS, access control and the rest; when set,
+    /// `mode`, `listen`, `connect` and `multicast_scouting` above override its values only if
+    /// they are given explicitly.
+    #[serde(default)]
+    pub config_file: Option<PathBuf>,
+}
+
+fn default_mode() -> String {
+    "peer".into()
+}
+
+impl Default for ZenohConfig {
+    fn default() -> Self {
+        Self {
+            mode: default_mode(),
+            listen: Vec::new(),
+            connect: Vec::new(),
+            multicast_scouting: false,
+            config_file: None,
+        }
+    }
+}
+
+/// HTTP API settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HttpConfig {
+    /// Address and port; loopback by default (put a reverse proxy in front to expose it).
+    #[serde(default = "default_bind")]
+    pub bind: String,
+}
+
+fn default_bind() -> String {
+    "127.0.0.1:9464".into()
+}
+
+impl Default for HttpConfig {
+    fn default() -> Self {
+        Self { bind: default_bind() }
+    }
+}
+
+/// Store settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StoreConfig {
+    /// SQLite file; absent means no persistence (windows start empty after a restart).
+    #[serde(default)]
+    pub path: Option<PathBuf>,
+    /// How often closed samples are written, milliseconds (1..=1000): the most a crash loses.
+    #[serde(default = "default_flush")]
+    pub flush_interval_ms: u64,
+}
+
+fn default_flush() -> u64 {
+    500
+}
+
+impl Default for StoreConfig {
+    fn default() -> Self {
+        Self { path: None, flush_interval_ms: default_flush() }
+    }
+}
+
+/// Where the residuals come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ResidualSource {
+    /// `e = cv − pred`, with `pred` published by the controller (`.../pred/<tag>`).
+    Pred,
+    /// `e = cv − G0(mv)`, with `G0` the `[[controller.model]]` channels simulated by the service.
+    Model,
+}
+
+/// One MV→CV channel of a nominal model: `y = q^-delay B(q⁻¹)/A(q⁻¹) f(u)`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelModel {
+    /// MV tag (input).
+    pub mv: String,
+    /// CV tag (output).
+    pub cv: String,
+    /// Numerator in ascending powers of q⁻¹.
+    pub b: Vec<f64>,
+    /// Denominator in ascending powers of q⁻¹ (`[1.0]` for none).
+    #[serde(default = "one")]
+    pub a: Vec<f64>,
+    /// Dead time, samples.
+    #[serde(default)]
+    pub delay: usize,
+    /// Static input map: `identity` (default), `square`, `sine`, or `polynomial` with `poly`.
+    #[serde(default = "identity")]
+    pub map: String,
+    /// Polynomial coefficients in ascending powers, for `map = "polynomial"`.
+    #[serde(default)]
+    pub poly: Vec<f64>,
+}
+
+fn one() -> Vec<f64> {
+    vec![1.0]
+}
+
+fn identity() -> String {
+    "identity".into()
+}
+
+/// One monitored controller.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerConfig {
+    /// Name, the second segment of its keys.
+    pub id: String,
+    /// Sample period in seconds; sample times are snapped to multiples of it.
+    pub period: f64,
+    /// MV tags (total MV `u = uc + ud`).
+    pub mv: Vec<String>,
+    /// Dither tags, one per MV in the same order.
+    pub dither: Vec<String>,
+    /// CV tags.
+    pub cv: Vec<String>,
+    /// Prediction tags, one per CV in the same order (residual = "pred").
+    #[serde(default)]
+    pub pred: Vec<String>,
+    /// Residual source.
+    #[serde(default = "default_residual")]
+    pub residual: ResidualSource,
+    /// Nominal model channels (residual = "model"); absent channels are zero.
+    #[serde(default)]
+    pub model: Vec<ChannelModel>,
+    /// Ring-buffer length in samples: the most recent samples analysed.
+    #[serde(default = "default_window")]
+    pub window: usize,
+    /// Least contiguous samples for an analysis; fewer gives `insufficient_data`.
+    #[serde(default = "default_min_samples")]
+    pub min_samples: usize,
+    /// Smallest lag (eq 19's tmin).
+    #[serde(default = "default_lag_min")]
+    pub lag_min: usize,
+    /// Largest lag (eq 19's tmax).
+    #[serde(default = "default_lag_max")]
+    pub lag_max: usize,
+    /// KSG neighbours.
+    #[serde(default = "default_k")]
+    pub k: usize,
+    /// Surrogates per element.
+    #[serde(default = "default_surrogates")]
+    pub surrogates: usize,
+    /// σ multiplier of the critical value μ + zσ.
+    #[serde(default = "default_sigma")]
+    pub sigma: f64,
+    /// Also test the joint embedding of two consecutive dither lags (doubles the cost).
+    #[serde(default)]
+    pub joint_embedding: bool,
+    /// Surrogate seed.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Seconds between analyses (wall clock).
+    #[serde(default = "default_every")]
+    pub every: f64,
+    /// Reorder tolerance in samples: a row waits this many sample periods past the newest
+    /// sample for its missing tags before it is closed (as a gap if still incomplete).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: usize,
+    /// Raise a channel's alarm after this many significant runs in a row.
+    #[serde(default = "default_raise")]
+    pub raise_after: u32,
+    /// Clear it after this many clean runs in a row.
+    #[serde(default = "default_clear")]
+    pub clear_after: u32,
+}
+
+fn default_residual() -> ResidualSource {
+    ResidualSource::Pred
+}
+fn default_window() -> usize {
+    1024
+}
+fn default_min_samples() -> usize {
+    256
+}
+fn default_lag_min() -> usize {
+    1
+}
+fn default_lag_max() -> usize {
+    10
+}
+fn default_k() -> usize {
+    4
+}
+fn default_surrogates() -> usize {
+    50
+}
+fn default_sigma() -> f64 {
+    6.0
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_every() -> f64 {
+    10.0
+}
+fn default_tolerance() -> usize {
+    5
+}
+fn default_raise() -> u32 {
+    2
+}
+fn default_clear() -> u32 {
+    3
+}
+
+/// Characters that zenoh key expressions reserve; none may appear in a prefix, id or tag.
+const RESERVED: &[char] = &['/', '*', '$', '?', '#', ' '];
+
+fn check_name(problems: &mut Vec<String>, key: &str, value: &str) {
+    if value.is_empty() {
+        problems.push(format!("{key}: must not be empty"));
+    } else if let Some(c) = value.chars().find(|c| RESERVED.contains(c)) {
+        problems.push(format!("{key}: {value:?} contains {c:?}, which zenoh key expressions reserve"));
+    }
+}
+
+fn check_tags(problems: &mut Vec<String>, key: &str, tags: &[String]) {
+    let mut seen = HashSet::new();
+    for (i, t) in tags.iter().enumerate() {
+        check_name(problems, &format!("{key}[{i}]"), t);
+        if !seen.insert(t) {
+            problems.push(format!("{key}[{i}]: tag {t:?} is listed twice"));
+        }
+    }
+}
+
+impl Config {
+    /// Reads and validates a file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| ConfigError::Read { path: path.to_path_buf(), source })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates TOML text; `origin` names it in messages.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, ConfigError> {
+        let cfg: Config = toml::from_str(text)
+            .map_err(|e| ConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        let problems = cfg.problems();
+        if problems.is_empty() {
+            Ok(cfg)
+        } else {
+            Err(ConfigError::Invalid { path: origin.to_string(), problems })
+        }
+    }
+
+    /// Every semantic problem, each message starting with the offending key.
+    pub fn problems(&self) -> Vec<String> {
+        let mut p = Vec::new();
+        check_name(&mut p, "prefix", &self.prefix);
+        if !["peer", "client", "router"].contains(&self.zenoh.mode.as_str()) {
+            p.push(format!("zenoh.mode: {:?} is not one of peer, client, router", self.zenoh.mode));
+        }
+        for (key, eps) in [("zenoh.listen", &self.zenoh.listen), ("zenoh.connect", &self.zenoh.connect)] {
+            for (i, e) in eps.iter().enumerate() {
+                if !e.contains('/') {
+                    p.push(format!("{key}[{i}]: {e:?} is not an endpoint such as tcp/127.0.0.1:7447"));
+                }
+            }
+        }
+        if let Some(f) = &self.zenoh.config_file
+            && !f.exists()
+        {
+            p.push(format!("zenoh.config_file: {} does not exist", f.display()));
+        }
+        if self.http.bind.parse::<SocketAddr>().is_err() {
+            p.push(format!("http.bind: {:?} is not an address:port such as 127.0.0.1:9464", self.http.bind));
+        }
+        if !(1..=1000).contains(&self.store.flush_interval_ms) {
+            p.push(format!(
+                "store.flush_interval_ms: {} must lie in 1..=1000 (at most one second of samples may be lost)",
+                self.store.flush_interval_ms
+            ));
+        }
+        if self.controllers.is_empty() {
+            p.push("controller: at least one [[controller]] table is needed".into());
+        }
+        let mut ids = HashSet::new();
+        for (n, c) in self.controllers.iter().enumerate() {
+            let key = format!("controller[{n}]");
+            check_name(&mut p, &format!("{key}.id"), &c.id);
+            if !ids.insert(&c.id) {
+                p.push(format!("{key}.id: {:?} is used by another controller", c.id));
+            }
+            c.problems(&format!("{key} ({:?})", c.id), &mut p);
+        }
+        p
+    }
+}
+
+impl ControllerConfig {
+    fn problems(&self, key: &str, p: &mut Vec<String>) {
+        if !(self.period.is_finite() && self.period > 0.0) {
+            p.push(format!("{key}.period: {} must be a positive number of seconds", self.period));
+        }
+        for (name, tags) in [("mv", &self.mv), ("dither", &self.dither), ("cv", &self.cv)] {
+            if tags.is_empty() {
+                p.push(format!("{key}.{name}: at least one tag is needed"));
+            }
+            check_tags(p, &format!("{key}.{name}"), tags);
+        }
+        check_tags(p, &format!("{key}.pred"), &self.pred);
+        if self.dither.len() != self.mv.len() {
+            p.push(format!(
+                "{key}.dither: {} tags for {} MVs (one dither per MV, in the same order)",
+                self.dither.len(),
+                self.mv.len()
+            ));
+        }
+        match self.residual {
+            ResidualSource::Pred => {
+                if self.pred.len() != self.cv.len() {
+                    p.push(format!(
+                        "{key}.pred: {} tags for {} CVs (residual = \"pred\" needs one prediction per CV)",
+                        self.pred.len(),
+                        self.cv.len()
+                    ));
+                }
+            }
+            ResidualSource::Model => {
+                if self.model.is_empty() {
+                    p.push(format!(
+                        "{key}.model: residual = \"model\" needs at least one [[controller.model]]"
+                    ));
+                }
+                for (m, ch) in self.model.iter().enumerate() {
+                    let mkey = format!("{key}.model[{m}]");
+                    if !self.mv.contains(&ch.mv) {
+                        p.push(format!("{mkey}.mv: {:?} is not one of the MV tags {:?}", ch.mv, self.mv));
+                    }
+                    if !self.cv.contains(&ch.cv) {
+                        p.push(format!("{mkey}.cv: {:?} is not one of the CV tags {:?}", ch.cv, self.cv));
+                    }
+                    if let Err(e) = channel(ch) {
+                        p.push(format!("{mkey}: {e}"));
+                    }
+                }
+                if p.is_empty()
+                    && let Ok(model) = self.nominal_model()
+                    && !model.is_strictly_proper()
+                {
+                    p.push(format!(
+                        "{key}.model: the model must be strictly proper (delay ≥ 1 or b[0] = 0): a residual \
+                         needs the prediction before the MV moves"
+                    ));
+                }
+            }
+        }
+        if self.window < 16 {
+            p.push(format!("{key}.window: {} is too short (at least 16 samples)", self.window));
+        }
+        if self.min_samples > self.window {
+            p.push(format!("{key}.min_samples: {} exceeds window {}", self.min_samples, self.window));
+        }
+        if self.lag_min > self.lag_max {
+            p.push(format!("{key}.lag_min: {} exceeds lag_max {}", self.lag_min, self.lag_max));
+        }
+        if self.min_samples < self.lag_max + 4 * (self.k + 1) {
+            p.push(format!(
+                "{key}.min_samples: {} is too few for lag_max {} and k {} (at least lag_max + 4(k+1))",
+                self.min_samples, self.lag_max, self.k
+            ));
+        }
+        if self.k == 0 {
+            p.push(format!("{key}.k: must be at least 1"));
+        }
+        if self.surrogates < 2 {
+            p.push(format!(
+                "{key}.surrogates: {} must be at least 2 (30 or more is sensible)",
+                self.surrogates
+            ));
+        }
+        if !(self.sigma.is_finite() && self.sigma > 0.0) {
+            p.push(format!("{key}.sigma: {} must be positive", self.sigma));
+        }
+        if !(self.every.is_finite() && self.every > 0.0) {
+            p.push(format!("{key}.every: {} must be a positive number of seconds", self.every));
+        }
+        if self.raise_after == 0 {
+            p.push(format!("{key}.raise_after: must be at least 1"));
+        }
+        if self.clear_after == 0 {
+            p.push(format!("{key}.clear_after: must be at least 1"));
+        }
+    }
+
+    /// The nominal model `G0` (CV rows × MV columns) of `residual = "model"`.
+    pub fn nominal_model(&self) -> Result<MimoModel, String> {
+        let mut rows: Vec<Vec<Option<Hammerstein>>> = vec![vec![None; self.mv.len()]; self.cv.len()];
+        for ch in &self.model {
+            let i = self.mv.iter().position(|t| t == &ch.mv).ok_or(format!("unknown MV {:?}", ch.mv))?;
+            let j = self.cv.iter().position(|t| t == &ch.cv).ok_or(format!("unknown CV {:?}", ch.cv))?;
+            if rows[j][i].is_some() {
+                return Err(format!("channel {}→{} is given twice", ch.mv, ch.cv));
+            }
+            rows[j][i] = Some(channel(ch)?);
+        }
+        MimoModel::new(rows).map_err(|e| e.to_string())
+    }
+}
+
+fn channel(ch: &ChannelModel) -> Result<Hammerstein, String> {
+    let map = match ch.map.as_str() {
+        "identity" => StaticMap::Identity,
+        "square" => StaticMap::Square,
+        "sine" => StaticMap::Sine,
+        "polynomial" => StaticMap::Polynomial(ch.poly.clone()),
+        other => return Err(format!("map {other:?} is not one of identity, square, sine, polynomial")),
+    };
+    if ch.b.iter().chain(&ch.a).any(|v| !v.is_finite()) {
+        return Err("coefficients must be finite".into());
+    }
+    let tf = DiscreteTf::new(ch.b.clone(), ch.a.clone(), ch.delay).map_err(|e| e.to_string())?;
+    tf.require_stable(&format!("{}→{}", ch.mv, ch.cv)).map_err(|e| e.to_string())?;
+    Hammerstein::new(map, tf).map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+[[controller]]
+id = "c1"
+period = 1.0
+mv = ["u1"]
+dither = ["ud1"]
+cv = ["y1"]
+pred = ["yhat1"]
+"#;
+
+    #[test]
+    fn minimal_config_takes_the_defaults() {
+        let c = Config::parse(GOOD, "test").unwrap();
+        assert_eq!(c.prefix, "mpm");
+        assert_eq!(c.zenoh.mode, "peer");
+        assert_eq!(c.http.bind, "127.0.0.1:9464");
+        assert_eq!(c.controllers[0].window, 1024);
+        assert_eq!(c.controllers[0].residual, ResidualSource::Pred);
+    }
+
+    #[test]
+    fn every_problem_is_reported_with_its_key() {
+        let text = r#"
+prefix = "a/b"
+[zenoh]
+mode = "satellite"
+[http]
+bind = "nowhere"
+[store]
+flush_interval_ms = 5000
+[[controller]]
+id = "c1"
+period = -1.0
+mv = ["u1", "u2"]
+dither = ["ud1"]
+cv = ["y1"]
+window = 100
+min_samples = 200
+surrogates = 1
+"#;
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(text, "t") else { panic!() };
+        let all = problems.join("\n");
+        for key in [
+            "prefix:",
+            "zenoh.mode:",
+            "http.bind:",
+            "store.flush_interval_ms:",
+            ".period:",
+            ".dither:",
+            ".pred:",
+            ".min_samples:",
+            ".surrogates:",
+        ] {
+            assert!(all.contains(key), "{key} missing from\n{all}");
+        }
+    }
+
+    #[test]
+    fn unknown_keys_are_named() {
+        let Err(ConfigError::Parse { message, .. }) = Config::parse(&format!("{GOOD}windw = 3\n"), "t")
+        else {
+            panic!()
+        };
+        assert!(message.contains("windw"), "{message}");
+    }
+
+    #[test]
+    fn model_channels_build_a_strictly_proper_model() {
+        let text = r#"
+[[controller]]
+id = "c1"
+period = 1.0
+mv = ["u1", "u2"]
+dither = ["ud1", "ud2"]
+cv = ["y1"]
+residual = "model"
+[[controller.model]]
+mv = "u1"
+cv = "y1"
+b = [0.0, 0.5]
+a = [1.0, -0.5]
+[[controller.model]]
+mv = "u2"
+cv = "y1"
+b = [1.0]
+delay = 2
+map = "square"
+"#;
+        let c = Config::parse(text, "t").unwrap();
+        let m = c.controllers[0].nominal_model().unwrap();
+        assert_eq!((m.outputs(), m.inputs()), (1, 2));
+        let bad = text.replace("delay = 2", "delay = 0");
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&bad, "t") else { panic!() };
+        assert!(problems[0].contains("strictly proper"), "{problems:?}");
+    }
+}

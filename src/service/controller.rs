@@ -1,0 +1,296 @@
+//! The state of one monitored controller: aligner, residuals, window, counters, the latest
+//! report and the alarm debounce. Synchronous; the async shell holds it behind a mutex and keeps
+//! each lock short (no analysis runs under it).
+
+use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::sync::Arc;
+
+use super::alarm::{AlarmEvent, Debounce, Transition};
+use super::align::{Aligner, ClosedRow, DropReason, Layout, Residuals, WindowRow};
+use super::analysis::{RunReport, RunStatus};
+use super::config::{ControllerConfig, ResidualSource};
+use super::payload::{self, Role};
+use super::window::Window;
+
+/// Alarm events kept in memory per controller (the store keeps them all).
+const HISTORY: usize = 500;
+
+/// What one message did.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct IngestOutcome {
+    /// Samples accepted onto the grid.
+    pub accepted: u64,
+    /// Samples (or, for `bad_payload`, messages) dropped, by reason.
+    pub dropped: Vec<(DropReason, u64)>,
+    /// Why the message or some of its samples were refused, for the log.
+    pub problem: Option<String>,
+}
+
+impl IngestOutcome {
+    fn drop(&mut self, r: DropReason, n: u64) {
+        if let Some(e) = self.dropped.iter_mut().find(|(d, _)| *d == r) {
+            e.1 += n;
+        } else {
+            self.dropped.push((r, n));
+        }
+    }
+}
+
+/// One controller's state.
+pub struct Controller {
+    /// Its configuration.
+    pub cfg: ControllerConfig,
+    columns: HashMap<(Role, String), usize>,
+    aligner: Aligner,
+    residuals: Residuals,
+    /// The analysis window.
+    pub window: Window,
+    debounce: BTreeMap<(usize, usize), Debounce>,
+    /// The latest report.
+    pub latest: Option<Arc<RunReport>>,
+    /// Recent alarm events, oldest first.
+    pub history: VecDeque<AlarmEvent>,
+    /// Window rows not yet written to the store (bounded by the window length).
+    pub unsaved: VecDeque<WindowRow>,
+    /// Samples accepted since start.
+    pub ingested: u64,
+    /// Drops since start, by reason.
+    pub dropped: HashMap<DropReason, u64>,
+    /// An analysis is in flight.
+    pub running: bool,
+}
+
+impl Controller {
+    /// A fresh state; the config must have been validated.
+    pub fn new(cfg: ControllerConfig) -> Result<Self, String> {
+        let layout = Layout {
+            mv: cfg.mv.len(),
+            dither: cfg.dither.len(),
+            cv: cfg.cv.len(),
+            pred: if cfg.residual == ResidualSource::Pred { cfg.pred.len() } else { 0 },
+        };
+        let mut columns = HashMap::new();
+        for (i, t) in cfg.mv.iter().enumerate() {
+            columns.insert((Role::Mv, t.clone()), i);
+        }
+        for (i, t) in cfg.dither.iter().enumerate() {
+            columns.insert((Role::Dither, t.clone()), layout.dither_at() + i);
+        }
+        for (i, t) in cfg.cv.iter().enumerate() {
+            columns.insert((Role::Cv, t.clone()), layout.cv_at() + i);
+        }
+        if layout.pred > 0 {
+            for (i, t) in cfg.pred.iter().enumerate() {
+                columns.insert((Role::Pred, t.clone()), layout.pred_at() + i);
+            }
+        }
+        let residuals = match cfg.residual {
+            ResidualSource::Pred => Residuals::from_pred(layout),
+            ResidualSource::Model => Residuals::from_model(layout, cfg.nominal_model()?, cfg.window),
+        };
+        let aligner = Aligner::new(cfg.period, cfg.tolerance, cfg.window, residuals.required());
+        Ok(Self {
+            columns,
+            aligner,
+            residuals,
+            window: Window::new(cfg.window),
+            debounce: BTreeMap::new(),
+            latest: None,
+            history: VecDeque::new(),
+            unsaved: VecDeque::new(),
+            ingested: 0,
+            dropped: HashMap::new(),
+            running: false,
+            cfg,
+        })
+    }
+
+    /// Decodes and aligns one message on `<role>/<tag>`, and counts what it did.
+    pub fn ingest(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
+        let out = self.ingest_uncounted(role, tag, bytes);
+        self.ingested += out.accepted;
+        for (r, n) in &out.dropped {
+            *self.dropped.entry(*r).or_default() += n;
+        }
+        out
+    }
+
+    /// Counts drops decided outside [`Controller::ingest`] (a key of the wrong shape).
+    pub fn count_drop(&mut self, reason: DropReason, n: u64) {
+        *self.dropped.entry(reason).or_default() += n;
+    }
+
+    fn ingest_uncounted(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
+        let mut out = IngestOutcome::default();
+        let samples = match payload::decode(bytes) {
+            Ok(s) => s,
+            Err(e) => {
+                out.drop(DropReason::BadPayload, 1);
+                out.problem = Some(e.to_string());
+                return out;
+            }
+        };
+        let Some(&col) = self.columns.get(&(role, tag.to_string())) else {
+            out.drop(DropReason::UnknownTag, samples.len() as u64);
+            out.problem = Some(format!("tag {}/{tag} is not configured", role.as_str()));
+            return out;
+        };
+        let mut closed: Vec<ClosedRow> = Vec::new();
+        for s in samples {
+            match self.aligner.offer(col, s.t, s.v, &mut closed) {
+                Ok(()) => out.accepted += 1,
+                Err(r) => {
+                    out.drop(r, 1);
+                    if out.problem.is_none() {
+                        out.problem = Some(format!("{}/{tag} at t = {}: {}", role.as_str(), s.t, r.as_str()));
+                    }
+                }
+            }
+        }
+        for row in &closed {
+            if let Some(w) = self.residuals.process(row) {
+                self.push_row(w);
+            }
+        }
+        out
+    }
+
+    fn push_row(&mut self, w: WindowRow) {
+        if self.window.push(w.clone()) {
+            if self.unsaved.len() == self.cfg.window {
+                self.unsaved.pop_front();
+            }
+            self.unsaved.push_back(w);
+        }
+    }
+
+    /// Restores window rows (oldest first) and the channels whose alarm was active.
+    pub fn restore(&mut self, rows: Vec<WindowRow>, active: &[(String, String)], history: Vec<AlarmEvent>) {
+        self.residuals.replay(&rows);
+        let last = rows.last().map(|r| r.slot);
+        for r in rows {
+            self.window.push(r);
+        }
+        if let Some(s) = last {
+            self.aligner.resume_after(s);
+        }
+        for (dither, cv) in active {
+            if let (Some(i), Some(j)) =
+                (self.cfg.dither.iter().position(|d| d == dither), self.cfg.cv.iter().position(|c| c == cv))
+            {
+                self.debounce.insert((i, j), Debounce::active());
+            }
+        }
+        self.history = history.into();
+    }
+
+    /// Feeds a run's verdicts to the debounce; returns the alarm events it caused. Runs that did
+    /// not analyse (insufficient data, errors) change nothing.
+    pub fn apply(&mut self, report: &RunReport) -> Vec<AlarmEvent> {
+        if report.status != RunStatus::Ok {
+            return Vec::new();
+        }
+        let mut events = Vec::new();
+        for ch in &report.channels {
+            let d = self.debounce.entry((ch.mv_index, ch.cv_index)).or_default();
+            if let Some(t) = d.update(ch.significant, self.cfg.raise_after, self.cfg.clear_after) {
+                events.push(AlarmEvent {
+                    controller: self.cfg.id.clone(),
+                    event: t,
+                    channel: format!("{}→{}", ch.dither, ch.cv),
+                    mv: ch.mv.clone(),
+                    dither: ch.dither.clone(),
+                    cv: ch.cv.clone(),
+                    statistic: ch.statistic.clone(),
+                    value_bits: ch.statistic_bits,
+                    critical_bits: ch.statistic_critical_bits,
+                    verdict: ch.verdict.clone(),
+                    time: report.time.clone(),
+                    data_time: report.last_time.unwrap_or(f64::NAN),
+                });
+            }
+        }
+        for e in &events {
+            if self.history.len() == HISTORY {
+                self.history.pop_front();
+            }
+            self.history.push_back(e.clone());
+        }
+        events
+    }
+
+    /// Whether the alarm of channel (mv index, cv index) is active.
+    pub fn alarm_active(&self, mv: usize, cv: usize) -> bool {
+        self.debounce.get(&(mv, cv)).is_some_and(|d| d.active)
+    }
+
+    /// Channels whose alarm is active, as (dither, cv) tags.
+    pub fn active_alarms(&self) -> Vec<(String, String)> {
+        self.debounce
+            .iter()
+            .filter(|(_, d)| d.active)
+            .map(|(&(i, j), _)| (self.cfg.dither[i].clone(), self.cfg.cv[j].clone()))
+            .collect()
+    }
+
+    /// Rows waiting in the aligner.
+    pub fn pending(&self) -> usize {
+        self.aligner.pending()
+    }
+}
+
+/// Whether an event raised (for counting).
+pub fn is_raise(e: &AlarmEvent) -> bool {
+    e.event == Transition::Raise
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::service::config::Config;
+
+    fn controller() -> Controller {
+        let cfg = Config::parse(
+            r#"
+[[controller]]
+id = "c1"
+period = 1.0
+mv = ["u1"]
+dither = ["ud1"]
+cv = ["y1"]
+pred = ["p1"]
+window = 64
+min_samples = 32
+lag_max = 3
+tolerance = 2
+"#,
+            "t",
+        )
+        .unwrap();
+        Controller::new(cfg.controllers[0].clone()).unwrap()
+    }
+
+    #[test]
+    fn complete_rows_reach_the_window_and_bad_input_is_counted() {
+        let mut c = controller();
+        for k in 0..10 {
+            let t = k as f64;
+            c.ingest(Role::Dither, "ud1", payload::encode(t, 1.0).as_bytes());
+            c.ingest(Role::Cv, "y1", payload::encode(t, 3.0).as_bytes());
+            c.ingest(Role::Pred, "p1", payload::encode(t, 1.0).as_bytes());
+        }
+        assert_eq!(c.window.len(), 10);
+        assert_eq!(c.window.rows().next().unwrap().residual, vec![2.0]);
+        assert!(c.window.rows().next().unwrap().mv[0].is_nan(), "MVs are optional with predictions");
+        let o = c.ingest(Role::Cv, "nope", payload::encode(11.0, 1.0).as_bytes());
+        assert_eq!(o.dropped, vec![(DropReason::UnknownTag, 1)]);
+        let o = c.ingest(Role::Cv, "y1", b"{");
+        assert_eq!(o.dropped, vec![(DropReason::BadPayload, 1)]);
+        let o = c.ingest(Role::Cv, "y1", br#"{"t": [20, 21, 3], "v": [1, "NaN", 2]}"#);
+        assert_eq!(o.accepted, 1);
+        assert_eq!(o.dropped, vec![(DropReason::NonFinite, 1), (DropReason::OutOfOrder, 1)]);
+        assert_eq!(c.ingested, 31);
+        assert_eq!(c.dropped[&DropReason::UnknownTag], 1);
+        assert_eq!(c.dropped[&DropReason::BadPayload], 1);
+    }
+}

@@ -1,0 +1,258 @@
+//! The HTTP API (DESIGN.md §4.4) with axum: thin handlers over [`Shared`]. Every error is JSON
+//! `{"error": "..."}` with a status code that says what went wrong: 400 for a bad request, 404
+//! for an unknown controller, channel or path, 503 while no analysis has produced the answer.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use axum::Json;
+use axum::Router;
+use axum::extract::{Path, Query, State};
+use axum::http::{StatusCode, header};
+use axum::response::{Html, IntoResponse, Response};
+use axum::routing::get;
+use serde::Serialize;
+use serde_json::json;
+use tokio::sync::watch;
+use tokio::task::JoinHandle;
+
+use super::Shared;
+use super::analysis::{self, RunStatus};
+use super::page;
+
+type AppState = Arc<Shared>;
+
+/// A JSON error with its status code.
+pub struct ApiError(StatusCode, String);
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        (self.0, Json(json!({ "error": self.1 }))).into_response()
+    }
+}
+
+fn not_found(what: String) -> ApiError {
+    ApiError(StatusCode::NOT_FOUND, what)
+}
+
+/// The router.
+pub fn router(shared: Arc<Shared>) -> Router {
+    Router::new()
+        .route("/", get(index))
+        .route("/healthz", get(healthz))
+        .route("/metrics", get(metrics))
+        .route("/api/v1/controllers", get(controllers))
+        .route("/api/v1/controllers/{id}", get(controller))
+        .route("/api/v1/controllers/{id}/matrix", get(matrix))
+        .route("/api/v1/controllers/{id}/alarms", get(alarms))
+        .route("/api/v1/controllers/{id}/profile", get(profile))
+        .fallback(|| async { not_found("no such path; see GET /api/v1/controllers".into()) })
+        .with_state(shared)
+}
+
+/// Serves until `stop`.
+pub fn spawn(
+    shared: Arc<Shared>,
+    listener: tokio::net::TcpListener,
+    mut stop: watch::Receiver<bool>,
+) -> JoinHandle<()> {
+    tokio::spawn(async move {
+        let app = router(shared);
+        let res = axum::serve(listener, app)
+            .with_graceful_shutdown(async move {
+                let _ = stop.changed().await;
+            })
+            .await;
+        if let Err(e) = res {
+            tracing::error!("http server: {e}");
+        }
+    })
+}
+
+async fn index() -> Html<&'static str> {
+    Html(page::INDEX)
+}
+
+async fn healthz(State(s): State<AppState>) -> Json<serde_json::Value> {
+    Json(json!({
+        "status": "ok",
+        "uptime_s": s.started.elapsed().as_secs_f64(),
+        "controllers": s.controllers.len(),
+    }))
+}
+
+async fn metrics(State(s): State<AppState>) -> Response {
+    (
+        [(header::CONTENT_TYPE, "application/openmetrics-text; version=1.0.0; charset=utf-8")],
+        s.metrics.encode(),
+    )
+        .into_response()
+}
+
+/// One controller's status.
+#[derive(Debug, Serialize)]
+pub struct ControllerStatus {
+    /// Id.
+    pub id: String,
+    /// Sample period, seconds.
+    pub period: f64,
+    /// Residual source.
+    pub residual: String,
+    /// MV tags.
+    pub mv: Vec<String>,
+    /// Dither tags.
+    pub dither: Vec<String>,
+    /// CV tags.
+    pub cv: Vec<String>,
+    /// Rows in the window.
+    pub window_len: usize,
+    /// Window length.
+    pub window_capacity: usize,
+    /// Contiguous rows at its end.
+    pub window_contiguous: usize,
+    /// Rows waiting for tags.
+    pub pending_rows: usize,
+    /// Samples accepted.
+    pub ingested: u64,
+    /// Drops by reason.
+    pub dropped: BTreeMap<String, u64>,
+    /// Status of the last run.
+    pub last_run_status: Option<RunStatus>,
+    /// Its time.
+    pub last_run_time: Option<String>,
+    /// Its duration, seconds.
+    pub last_run_duration_s: Option<f64>,
+    /// Last run found mismatch.
+    pub mismatch: bool,
+    /// Channels whose alarm is raised, `dither→cv`.
+    pub active_alarms: Vec<String>,
+}
+
+fn status(s: &Shared, id: &str) -> Option<ControllerStatus> {
+    let c = s.lock(id)?;
+    let latest = c.latest.clone();
+    Some(ControllerStatus {
+        id: id.to_string(),
+        period: c.cfg.period,
+        residual: format!("{:?}", c.cfg.residual).to_lowercase(),
+        mv: c.cfg.mv.clone(),
+        dither: c.cfg.dither.clone(),
+        cv: c.cfg.cv.clone(),
+        window_len: c.window.len(),
+        window_capacity: c.window.capacity(),
+        window_contiguous: c.window.contiguous_tail(),
+        pending_rows: c.pending(),
+        ingested: c.ingested,
+        dropped: super::align::DropReason::ALL
+            .iter()
+            .map(|r| (r.as_str().to_string(), c.dropped.get(r).copied().unwrap_or(0)))
+            .collect(),
+        last_run_status: latest.as_ref().map(|r| r.status),
+        last_run_time: latest.as_ref().map(|r| r.time.clone()),
+        last_run_duration_s: latest.as_ref().map(|r| r.duration_s),
+        mismatch: latest.as_ref().is_some_and(|r| r.mismatch),
+        active_alarms: c.active_alarms().into_iter().map(|(d, cv)| format!("{d}→{cv}")).collect(),
+    })
+}
+
+async fn controllers(State(s): State<AppState>) -> Json<Vec<ControllerStatus>> {
+    Json(s.controllers.keys().filter_map(|id| status(&s, id)).collect())
+}
+
+async fn controller(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<ControllerStatus>, ApiError> {
+    status(&s, &id).map(Json).ok_or_else(|| unknown(&id))
+}
+
+fn unknown(id: &str) -> ApiError {
+    not_found(format!("unknown controller {id:?}"))
+}
+
+async fn matrix(State(s): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    let latest = s.lock(&id).ok_or_else(|| unknown(&id))?.latest.clone();
+    let r = latest.ok_or_else(|| {
+        ApiError(StatusCode::SERVICE_UNAVAILABLE, format!("no analysis of {id:?} has run yet"))
+    })?;
+    Ok(Json(&*r).into_response())
+}
+
+async fn alarms(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    Query(q): Query<HashMap<String, String>>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let limit = match q.get("limit") {
+        None => 100,
+        Some(v) => v.parse::<usize>().ok().filter(|&n| (1..=10_000).contains(&n)).ok_or_else(|| {
+            ApiError(StatusCode::BAD_REQUEST, format!("limit {v:?} must be an integer in 1..=10000"))
+        })?,
+    };
+    let (active, memory) = {
+        let c = s.lock(&id).ok_or_else(|| unknown(&id))?;
+        (c.active_alarms(), c.history.iter().cloned().collect::<Vec<_>>())
+    };
+    let history = match s.store.clone() {
+        Some(store) => {
+            let id2 = id.clone();
+            tokio::task::spawn_blocking(move || store.alarms(&id2, limit))
+                .await
+                .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+                .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+        }
+        None => memory.iter().rev().take(limit).rev().cloned().collect(),
+    };
+    Ok(Json(json!({
+        "controller": id,
+        "active": active.iter().map(|(d, cv)| json!({"channel": format!("{d}→{cv}"), "dither": d, "cv": cv})).collect::<Vec<_>>(),
+        "history": history,
+    })))
+}
+
+async fn profile(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    Query(q): Query<HashMap<String, String>>,
+) -> Result<Response, ApiError> {
+    let latest = s.lock(&id).ok_or_else(|| unknown(&id))?.latest.clone();
+    let (Some(mv), Some(cv)) = (q.get("mv"), q.get("cv")) else {
+        return Err(ApiError(
+            StatusCode::BAD_REQUEST,
+            "query parameters mv and cv are required (tags)".into(),
+        ));
+    };
+    let (mvs, cvs) = {
+        let c = s.lock(&id).ok_or_else(|| unknown(&id))?;
+        (c.cfg.mv.iter().chain(&c.cfg.dither).cloned().collect::<Vec<_>>(), c.cfg.cv.clone())
+    };
+    if !mvs.contains(mv) {
+        return Err(not_found(format!("controller {id:?} has no MV or dither tag {mv:?}")));
+    }
+    if !cvs.contains(cv) {
+        return Err(not_found(format!("controller {id:?} has no CV tag {cv:?}")));
+    }
+    let r = latest.ok_or_else(|| {
+        ApiError(StatusCode::SERVICE_UNAVAILABLE, format!("no analysis of {id:?} has run yet"))
+    })?;
+    if r.status != RunStatus::Ok {
+        return Err(ApiError(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!(
+                "the last run of {id:?} was {}: {}",
+                r.status.as_str(),
+                r.message.clone().unwrap_or_default()
+            ),
+        ));
+    }
+    let ch = r.channel(mv, cv).ok_or_else(|| {
+        ApiError(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("{mv}→{cv} was not tested in the last run (dither not excited)"),
+        )
+    })?;
+    let p = analysis::profile(&r, ch).ok_or_else(|| {
+        ApiError(StatusCode::INTERNAL_SERVER_ERROR, "profile missing from the last run".into())
+    })?;
+    Ok(Json(p).into_response())
+}
