@@ -169,17 +169,19 @@ async fn demo(args: Args, cfg: Config) -> anyhow::Result<()> {
     let mut last_print = Instant::now();
     let names_u = ["u1", "u2", "u3"];
     let names_d = ["ud1", "ud2", "ud3"];
+    let stop = super::serve::shutdown_signal();
+    tokio::pin!(stop);
     loop {
         tokio::select! {
             _ = tick.tick() => {}
-            _ = super::serve::shutdown_signal() => break,
+            _ = &mut stop => break,
         }
         if args.duration > 0.0 && started.elapsed().as_secs_f64() > args.duration {
             break;
         }
         let Some(s) = plant.step()? else {
             println!("the simulated record is used up; still serving (Ctrl-C to stop)");
-            super::serve::shutdown_signal().await;
+            (&mut stop).await;
             break;
         };
         if s.k == args.switch_at {

@@ -26,12 +26,22 @@ pub enum DropReason {
     OutOfOrder,
     /// Older than the whole window: of no use any more (e.g. a historian back-fill).
     Late,
+    /// Stamped more than a day after the wall clock: a bogus time that would otherwise close
+    /// every open row and make all later samples look out of order.
+    Future,
 }
 
 impl DropReason {
     /// Every reason, for metrics that must show zeros too.
-    pub const ALL: [DropReason; 6] =
-        [Self::BadPayload, Self::UnknownTag, Self::NonFinite, Self::Duplicate, Self::OutOfOrder, Self::Late];
+    pub const ALL: [DropReason; 7] = [
+        Self::BadPayload,
+        Self::UnknownTag,
+        Self::NonFinite,
+        Self::Duplicate,
+        Self::OutOfOrder,
+        Self::Late,
+        Self::Future,
+    ];
 
     /// The metric label.
     pub fn as_str(self) -> &'static str {
@@ -42,6 +52,7 @@ impl DropReason {
             Self::Duplicate => "duplicate",
             Self::OutOfOrder => "out_of_order",
             Self::Late => "late",
+            Self::Future => "future",
         }
     }
 }
@@ -218,15 +229,11 @@ impl Residuals {
         }
     }
 
-    /// The columns a complete row needs.
+    /// The columns a row waits for before it closes early: all of them, MVs included even when
+    /// predictions are published (an MV that comes last would otherwise find its row closed).
+    /// A row that closes on the tolerance without its MVs is still used in `pred` mode.
     pub fn required(&self) -> Vec<bool> {
-        let l = self.layout;
-        let mut r = vec![false; l.width()];
-        let need_mv = self.model.is_some();
-        for (c, req) in r.iter_mut().enumerate() {
-            *req = if c < l.mv { need_mv } else { true };
-        }
-        r
+        vec![true; self.layout.width()]
     }
 
     /// The window row of a closed row, or `None` when it is incomplete (a gap).

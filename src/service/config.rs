@@ -81,9 +81,9 @@ pub struct ZenohConfig {
     /// monitor only talks to the endpoints it is told.
     #[serde(default)]
     pub multicast_scouting: bool,
-    /// A full zenoh configuration file (JSON5) for TLS, access control and the rest; when set,
-    /// `mode`, `listen`, `connect` and `multicast_scouting` above override its values only if
-    /// they are given explicitly.
+    /// A full zenoh configuration file (JSON5) for TLS, access control and the rest. When set,
+    /// `mode` and `multicast_scouting` come from the file, and `listen` and `connect` replace
+    /// the file's endpoints only when they are not empty.
     #[serde(default)]
     pub config_file: Option<PathBuf>,
 }

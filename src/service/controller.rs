@@ -15,6 +15,10 @@ use super::window::Window;
 /// Alarm events kept in memory per controller (the store keeps them all).
 const HISTORY: usize = 500;
 
+/// How far past the wall clock a sample time may lie (seconds since the Unix epoch): clocks of
+/// historians drift, but not by a day.
+const FUTURE_SLACK: f64 = 86_400.0;
+
 /// What one message did.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct IngestOutcome {
@@ -136,8 +140,14 @@ impl Controller {
             return out;
         };
         let mut closed: Vec<ClosedRow> = Vec::new();
+        let latest_ok = chrono::Utc::now().timestamp() as f64 + FUTURE_SLACK;
         for s in samples {
-            match self.aligner.offer(col, s.t, s.v, &mut closed) {
+            let res = if s.t > latest_ok {
+                Err(DropReason::Future)
+            } else {
+                self.aligner.offer(col, s.t, s.v, &mut closed)
+            };
+            match res {
                 Ok(()) => out.accepted += 1,
                 Err(r) => {
                     out.drop(r, 1);
@@ -279,7 +289,8 @@ tolerance = 2
             c.ingest(Role::Cv, "y1", payload::encode(t, 3.0).as_bytes());
             c.ingest(Role::Pred, "p1", payload::encode(t, 1.0).as_bytes());
         }
-        assert_eq!(c.window.len(), 10);
+        // no MVs published: rows close on the tolerance (2), so the last two still wait
+        assert_eq!(c.window.len(), 8);
         assert_eq!(c.window.rows().next().unwrap().residual, vec![2.0]);
         assert!(c.window.rows().next().unwrap().mv[0].is_nan(), "MVs are optional with predictions");
         let o = c.ingest(Role::Cv, "nope", payload::encode(11.0, 1.0).as_bytes());
@@ -290,7 +301,56 @@ tolerance = 2
         assert_eq!(o.accepted, 1);
         assert_eq!(o.dropped, vec![(DropReason::NonFinite, 1), (DropReason::OutOfOrder, 1)]);
         assert_eq!(c.ingested, 31);
+        let o = c.ingest(Role::Cv, "y1", br#"{"t": "2999-01-01T00:00:00Z", "v": 1}"#);
+        assert_eq!(o.dropped, vec![(DropReason::Future, 1)]);
+        let o = c.ingest(Role::Cv, "y1", payload::encode(22.0, 1.0).as_bytes());
+        assert_eq!(o.accepted, 1, "a bogus future time does not disturb what follows");
         assert_eq!(c.dropped[&DropReason::UnknownTag], 1);
         assert_eq!(c.dropped[&DropReason::BadPayload], 1);
+    }
+
+    #[test]
+    fn a_restored_model_controller_continues_with_the_same_residuals() {
+        let text = r#"
+[[controller]]
+id = "m1"
+period = 1.0
+mv = ["u1"]
+dither = ["ud1"]
+cv = ["y1"]
+residual = "model"
+window = 64
+min_samples = 32
+lag_max = 3
+[[controller.model]]
+mv = "u1"
+cv = "y1"
+b = [0.0, 0.5]
+a = [1.0, -0.7]
+"#;
+        let cfg = Config::parse(text, "t").unwrap().controllers[0].clone();
+        let mut a = Controller::new(cfg.clone()).unwrap();
+        let feed = |c: &mut Controller, k: usize| {
+            let t = k as f64;
+            let u = ((k * 7) % 5) as f64;
+            c.ingest(Role::Mv, "u1", payload::encode(t, u).as_bytes());
+            c.ingest(Role::Dither, "ud1", payload::encode(t, 1.0).as_bytes());
+            c.ingest(Role::Cv, "y1", payload::encode(t, t.sin()).as_bytes());
+        };
+        for k in 0..40 {
+            feed(&mut a, k);
+        }
+        let mut b = Controller::new(cfg).unwrap();
+        b.restore(a.window.rows().cloned().collect(), &[("ud1".into(), "y1".into())], Vec::new());
+        assert_eq!(b.window.len(), 40);
+        assert!(b.alarm_active(0, 0));
+        for k in 40..45 {
+            feed(&mut a, k);
+            feed(&mut b, k);
+        }
+        let ra: Vec<f64> = a.window.rows().map(|r| r.residual[0]).collect();
+        let rb: Vec<f64> = b.window.rows().map(|r| r.residual[0]).collect();
+        assert_eq!(ra, rb);
+        assert_eq!(b.window.len(), 45);
     }
 }

@@ -26,8 +26,9 @@ table.m td.alarm { border-color: #d00; }
 </head>
 <body>
 <h1>mpmwatch: model–plant mismatch monitor</h1>
-<div class="sub">Each cell: norm of MI between the dither (column) and the residual of the CV (row), in bits, over its
-surrogate critical value. Grey: below it (no evidence of mismatch); orange to red: above it. A red frame: alarm raised.
+<div class="sub">Each cell: norm of MI between the dither (column) and the residual of the CV (row), in bits, and its
+surrogate critical value; a channel is also significant when the MI at one lag exceeds that lag's own critical value
+("lag N"). Grey: below it (no evidence of mismatch); orange to red: above it. A red frame: alarm raised.
 Refreshes every 3 s. <span id="stamp"></span></div>
 <div id="root">loading…</div>
 <script>
@@ -60,7 +61,9 @@ async function refresh() {
           const ratio = ch.statistic_critical_bits > 0 ? ch.statistic_bits / ch.statistic_critical_bits : 0;
           const cls = alarms.has(`${d}→${cv}`) ? ' class="alarm"' : '';
           html += `<td${cls} style="background:${colour(ratio, ch.significant)}" title="${esc(ch.reason)}">` +
-            `${ch.norm_bits.toFixed(4)}<br><small>crit ${ch.critical_bits.toFixed(4)}</small><br><small>${esc(ch.verdict)}</small></td>`;
+            `${ch.norm_bits.toFixed(4)}<br><small>crit ${ch.critical_bits.toFixed(4)}</small><br><small>${esc(ch.verdict)}` +
+            (ch.significant && ch.statistic === 'lag_mi' ? ` (lag ${ch.peak_lag})` : '') +
+            (ch.significant && ch.statistic === 'joint_mi' ? ' (joint lags)' : '') + '</small></td>';
         });
         html += '</tr>';
       });
