@@ -1,0 +1,115 @@
+//! Choosing between hypotheses. Every concrete term is fitted by least squares on the first
+//! part of the training data and scored on the rest of the training data (never on the held-out
+//! tail) in simulation mode, with a BIC-style penalty per coefficient and per grid value. The
+//! intercept-only correction is the null hypothesis every term must beat.
+
+use super::candidates::{OutputCtx, Term, grid};
+use super::fit::{frols, least_squares};
+use super::simulate::{FittedTerm, correction};
+
+/// One scored hypothesis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scored {
+    /// The fitted term (`None`: the null hypothesis).
+    pub fitted: Option<FittedTerm>,
+    /// Validation sum of squared errors.
+    pub sse: f64,
+    /// Complexity: coefficients plus grid values.
+    pub complexity: usize,
+    /// Penalised score (lower is better).
+    pub score: f64,
+}
+
+/// Splits of the record.
+#[derive(Debug, Clone)]
+pub struct Split {
+    /// Rows used to fit during selection.
+    pub fit: std::ops::Range<usize>,
+    /// Rows used to score during selection (the end of the training part).
+    pub validate: std::ops::Range<usize>,
+    /// The whole training part (the final refit).
+    pub train: std::ops::Range<usize>,
+}
+
+/// Fits one term's coefficients on `rows` against the residual `r`.
+pub fn fit_term(ctx: &OutputCtx, r: &[f64], input: usize, term: Term, rows: std::ops::Range<usize>) -> Option<FittedTerm> {
+    let term = match term {
+        Term::Bilinear(ref pool) if pool.is_empty() => {
+            // FROLS chooses up to two products from the pool on these rows.
+            let pool = ctx.bilinear_pool(input);
+            let cols = ctx.columns(input, &Term::Bilinear(pool.clone()));
+            let rc: Vec<f64> = centre_on(r, &rows);
+            let cc: Vec<Vec<f64>> = cols.iter().map(|c| centre_on(c, &rows)).collect();
+            let chosen = frols(&cc, &rc, rows.clone(), 2, 0.01);
+            if chosen.is_empty() {
+                return None;
+            }
+            Term::Bilinear(chosen.iter().map(|&(k, _)| pool[k]).collect())
+        }
+        t => t,
+    };
+    let cols = ctx.columns(input, &term);
+    let ones = vec![1.0; r.len()];
+    let mut refs: Vec<&[f64]> = vec![&ones];
+    refs.extend(cols.iter().map(|c| c.as_slice()));
+    let th = least_squares(&refs, r, rows.clone())?;
+    let mut f = FittedTerm { input, term, intercept: th[0], coefs: th[1..].to_vec() };
+    if f.term.is_recursive() {
+        // The linearised coefficient used the recorded output; refine its scale in simulation
+        // mode on the same rows (a one-dimensional grid), re-centring the intercept each time.
+        let base = f.coefs[0];
+        let mut best: Option<(f64, FittedTerm)> = None;
+        for m in [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0] {
+            let mut g = FittedTerm { intercept: 0.0, coefs: vec![base * m], ..f.clone() };
+            let Some(c) = correction(ctx, &g) else { continue };
+            g.intercept = rows.clone().map(|t| r[t] - c[t]).sum::<f64>() / rows.len() as f64;
+            let sse: f64 = rows.clone().map(|t| (r[t] - c[t] - g.intercept).powi(2)).sum();
+            if best.as_ref().is_none_or(|b| sse < b.0) {
+                best = Some((sse, g));
+            }
+        }
+        f = best?.1;
+    }
+    Some(f)
+}
+
+fn centre_on(x: &[f64], rows: &std::ops::Range<usize>) -> Vec<f64> {
+    let m = rows.clone().map(|t| x[t]).sum::<f64>() / rows.len().max(1) as f64;
+    x.iter().map(|v| v - m).collect()
+}
+
+/// Scores a fitted term on the validation rows.
+pub fn score(ctx: &OutputCtx, r: &[f64], f: Option<FittedTerm>, split: &Split, penalty: f64) -> Option<Scored> {
+    let (c, complexity) = match &f {
+        Some(f) => (correction(ctx, f)?, 1 + f.coefs.len() + f.term.grid_params()),
+        None => {
+            let m = split.fit.clone().map(|t| r[t]).sum::<f64>() / split.fit.len() as f64;
+            (vec![m; r.len()], 1)
+        }
+    };
+    let n = split.validate.len() as f64;
+    let sse: f64 = split.validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum();
+    if !sse.is_finite() {
+        return None;
+    }
+    let score = n * (sse / n).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
+    Some(Scored { fitted: f, sse, complexity, score })
+}
+
+/// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
+pub fn rank(ctx: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty: f64) -> Vec<Scored> {
+    let mut out: Vec<Scored> = score(ctx, r, None, split, penalty).into_iter().collect();
+    for &i in inputs {
+        let mut terms = grid(ctx, i, split.fit.clone());
+        if ctx.has_channel[i] {
+            terms.push(Term::Bilinear(Vec::new()));
+        }
+        for t in terms {
+            if let Some(f) = fit_term(ctx, r, i, t, split.fit.clone()) {
+                out.extend(score(ctx, r, Some(f), split, penalty));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.score.total_cmp(&b.score));
+    out
+}
