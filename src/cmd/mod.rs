@@ -2,6 +2,8 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod casebook;
+pub mod diagnose;
 pub mod mi;
 pub mod reproduce;
 pub mod simulate;

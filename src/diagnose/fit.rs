@@ -130,3 +130,29 @@ mod tests {
         assert!((y[29] - 1.0).abs() < 1e-6 && y[0] == 0.0);
     }
 }
+
+/// Instrumental-variable estimate: solves `Zᵀ X θ = Zᵀ y` over `rows`, with one instrument column
+/// per regressor. In a closed loop the regressors (built from the recorded inputs) carry the
+/// disturbance back through feedback and least squares is biased; instruments built from the
+/// dither-driven part of the inputs are independent of the disturbance, so the estimate is not.
+/// With `Z = X` this is least squares.
+pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: std::ops::Range<usize>) -> Option<Vec<f64>> {
+    let p = cols.len();
+    if p == 0 || inst.len() != p {
+        return None;
+    }
+    let n = rows.len();
+    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows.start + r]);
+    let z = DMatrix::from_fn(n, p, |r, c| inst[c][rows.start + r]);
+    let b = DVector::from_fn(n, |r, _| y[rows.start + r]);
+    let zx = z.transpose() * &x;
+    let zy = z.transpose() * b;
+    let svd = zx.svd(true, true);
+    let smax = svd.singular_values.max();
+    if !smax.is_finite() || smax == 0.0 {
+        return None;
+    }
+    let theta = svd.solve(&zy, smax * 1e-9).ok()?;
+    let out: Vec<f64> = theta.iter().copied().collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}

@@ -26,6 +26,7 @@ pub mod nominal;
 pub mod report;
 pub mod select;
 pub mod simulate;
+pub mod tanks;
 
 use std::collections::BTreeMap;
 
@@ -149,7 +150,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let ts = sample_time(input.time)?;
     let w0 = opts.warmup;
     let n_fit = w0 + (0.7 * (n_train - w0) as f64) as usize;
-    let split = Split { fit: w0..n_fit, validate: n_fit..n_train, train: w0..n_train };
+    let features = input.excitations.as_ref().map(|e| dither_features(&e.iter().map(|s| s.values).collect::<Vec<_>>()));
+    let split = Split { features, fit: w0..n_fit, validate: n_fit..n_train, train: w0..n_train };
 
     let residuals: Vec<Vec<f64>> =
         input.outputs.iter().zip(&input.simulated).map(|(y, s)| y.values.iter().zip(s.values).map(|(a, b)| a - b).collect()).collect();
@@ -175,6 +177,13 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut findings = Vec::new();
     let mut corrected: Vec<Vec<f64>> = input.simulated.iter().map(|s| s.values.to_vec()).collect();
     let u_all: Vec<&[f64]> = input.inputs.iter().map(|u| u.values).collect();
+    let u_driven: Vec<Vec<f64>> = match &input.excitations {
+        Some(e) => {
+            let ev: Vec<&[f64]> = e.iter().map(|s| s.values).collect();
+            u_all.iter().map(|u| dither_driven(u, &ev, split.train.clone())).collect()
+        }
+        None => u_all.iter().map(|u| u.to_vec()).collect(),
+    };
     if let Some(m) = &matrix {
         for c in &m.cells {
             let j = testable[c.cv];
@@ -202,9 +211,10 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 continue;
             }
             let ctx = output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split);
+            let inst = instrument_ctx(&ctx, &u_driven);
             let r = &residuals[j];
-            let ranked = select::rank(&ctx, r, &flagged, &split, opts.penalty);
-            let (finding, corr) = decide(&ctx, r, &ranked, &flagged, &split, opts, ts, input, j);
+            let ranked = select::rank(&ctx, &inst, r, &flagged, &split, opts.penalty);
+            let (finding, corr) = decide(&ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
             if let Some(c) = corr {
                 corrected[j].iter_mut().zip(&c).for_each(|(a, b)| *a += b);
             }
@@ -258,10 +268,64 @@ pub fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCt
     OutputCtx { y0: nominal::median(&s[split.train.clone()]), ut, u0, y: y.to_vec(), s: s.to_vec(), model, has_channel, s_channel }
 }
 
+/// The dither-driven part of an input: its least-squares projection on the excitations at lags
+/// 0..=30 (and a constant) over the training rows. The excitations are independent of the
+/// disturbance, so this part is too; it is what the instruments are built from.
+pub fn dither_driven(u: &[f64], exc: &[&[f64]], rows: std::ops::Range<usize>) -> Vec<f64> {
+    let ones = vec![1.0; u.len()];
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    for e in exc {
+        for l in 0..=30 {
+            cols.push(fit::delayed(e, l));
+        }
+    }
+    let mut refs: Vec<&[f64]> = vec![&ones];
+    refs.extend(cols.iter().map(|c| c.as_slice()));
+    match fit::least_squares(&refs, u, rows) {
+        Some(th) => (0..u.len()).map(|t| refs.iter().zip(&th).map(|(c, b)| c[t] * b).sum()).collect(),
+        None => u.to_vec(),
+    }
+}
+
+/// Features of the dither history on which closed-loop scores are projected: a constant, each
+/// dither at lags 0..=20, its square at lags 0..=4 (non-binary dithers), and products of its
+/// lags 0..=4 (what an even nonlinearity makes of a binary dither).
+pub fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
+    let n = exc.first().map_or(0, |e| e.len());
+    let mut z = vec![vec![1.0; n]];
+    for e in exc {
+        let lags: Vec<Vec<f64>> = (0..=20).map(|l| fit::delayed(e, l)).collect();
+        let binary = e.iter().all(|v| (v.abs() - e[0].abs()).abs() < 1e-12);
+        for a in 0..=4 {
+            if !binary {
+                z.push(lags[a].iter().map(|v| v * v).collect());
+            }
+            for b in a + 1..=4 {
+                z.push(lags[a].iter().zip(&lags[b]).map(|(x, y)| x * y).collect());
+            }
+        }
+        z.extend(lags);
+    }
+    z
+}
+
+/// The instrument context: `ctx` with the dither-driven inputs in place of the recorded ones,
+/// and the model's response to them in place of the simulated and recorded outputs.
+pub fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
+    let ut: Vec<Vec<f64>> = u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
+    let s_channel: Vec<Vec<f64>> = (0..ut.len()).map(|i| ctx.model.channel(i, &ut[i])).collect();
+    let mut s = vec![ctx.y0; ctx.s.len()];
+    for c in &s_channel {
+        s.iter_mut().zip(c).for_each(|(a, b)| *a += b);
+    }
+    OutputCtx { ut, s_channel, y: s.clone(), s, ..ctx.clone() }
+}
+
 /// From the ranked hypotheses of one output to its finding and correction.
 #[allow(clippy::too_many_arguments)]
 fn decide(
     ctx: &OutputCtx,
+    inst: &OutputCtx,
     r: &[f64],
     ranked: &[select::Scored],
     flagged: &[usize],
@@ -295,7 +359,7 @@ fn decide(
     let out_name = input.outputs[j].name;
     if let Some(f) = best.and_then(|b| b.fitted.clone()) {
         // Refit the chosen hypothesis (its grid values fixed) on the whole training part.
-        let refit = select::fit_term(ctx, r, f.input, f.term.clone(), split.train.clone()).unwrap_or(f);
+        let refit = select::fit_term(ctx, inst, r, f.input, f.term.clone(), split.train.clone()).unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);

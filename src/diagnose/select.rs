@@ -4,7 +4,7 @@
 //! intercept-only correction is the null hypothesis every term must beat.
 
 use super::candidates::{OutputCtx, Term, grid};
-use super::fit::{frols, least_squares};
+use super::fit::{frols, instrumental, least_squares};
 use super::simulate::{FittedTerm, correction};
 
 /// One scored hypothesis.
@@ -23,6 +23,9 @@ pub struct Scored {
 /// Splits of the record.
 #[derive(Debug, Clone)]
 pub struct Split {
+    /// Dither features on which a closed-loop score is projected (`None`: open loop, the plain
+    /// validation error is the score).
+    pub features: Option<Vec<Vec<f64>>>,
     /// Rows used to fit during selection.
     pub fit: std::ops::Range<usize>,
     /// Rows used to score during selection (the end of the training part).
@@ -32,12 +35,21 @@ pub struct Split {
 }
 
 /// Fits one term's coefficients on `rows` against the residual `r`.
-pub fn fit_term(ctx: &OutputCtx, r: &[f64], input: usize, term: Term, rows: std::ops::Range<usize>) -> Option<FittedTerm> {
+/// The columns of the term are instrumented by the same columns built on `inst`, the context
+/// with the dither-driven part of the inputs in place of the recorded inputs.
+pub fn fit_term(
+    ctx: &OutputCtx,
+    inst: &OutputCtx,
+    r: &[f64],
+    input: usize,
+    term: Term,
+    rows: std::ops::Range<usize>,
+) -> Option<FittedTerm> {
     let term = match term {
         Term::Bilinear(ref pool) if pool.is_empty() => {
             // FROLS chooses up to two products from the pool on these rows.
             let pool = ctx.bilinear_pool(input);
-            let cols = ctx.columns(input, &Term::Bilinear(pool.clone()));
+            let cols = inst.columns(input, &Term::Bilinear(pool.clone()));
             let rc: Vec<f64> = centre_on(r, &rows);
             let cc: Vec<Vec<f64>> = cols.iter().map(|c| centre_on(c, &rows)).collect();
             let chosen = frols(&cc, &rc, rows.clone(), 2, 0.01);
@@ -52,7 +64,10 @@ pub fn fit_term(ctx: &OutputCtx, r: &[f64], input: usize, term: Term, rows: std:
     let ones = vec![1.0; r.len()];
     let mut refs: Vec<&[f64]> = vec![&ones];
     refs.extend(cols.iter().map(|c| c.as_slice()));
-    let th = least_squares(&refs, r, rows.clone())?;
+    let zcols = inst.columns(input, &term);
+    let mut zrefs: Vec<&[f64]> = vec![&ones];
+    zrefs.extend(zcols.iter().map(|c| c.as_slice()));
+    let th = instrumental(&refs, &zrefs, r, rows.clone())?;
     let mut f = FittedTerm { input, term, intercept: th[0], coefs: th[1..].to_vec() };
     if f.term.is_recursive() {
         // The linearised coefficient used the recorded output; refine its scale in simulation
@@ -88,16 +103,28 @@ pub fn score(ctx: &OutputCtx, r: &[f64], f: Option<FittedTerm>, split: &Split, p
         }
     };
     let n = split.validate.len() as f64;
-    let sse: f64 = split.validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum();
+    let e: Vec<f64> = (0..r.len()).map(|t| r[t] - c[t]).collect();
+    let (sse, dof) = match &split.features {
+        // In a closed loop the disturbance reaches the inputs through feedback, so a correction
+        // can lower the plain error by cancelling disturbance through the inputs. Only the part
+        // of the error the dithers can explain counts: its projection on the dither features.
+        Some(z) => {
+            let refs: Vec<&[f64]> = z.iter().map(|c| c.as_slice()).collect();
+            let th = least_squares(&refs, &e, split.validate.clone())?;
+            let proj: f64 = split.validate.clone().map(|t| refs.iter().zip(&th).map(|(c, b)| c[t] * b).sum::<f64>().powi(2)).sum();
+            (proj, z.len() as f64)
+        }
+        None => (split.validate.clone().map(|t| e[t].powi(2)).sum(), n),
+    };
     if !sse.is_finite() {
         return None;
     }
-    let score = n * (sse / n).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
+    let score = dof * (sse / dof).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
     Some(Scored { fitted: f, sse, complexity, score })
 }
 
 /// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
-pub fn rank(ctx: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty: f64) -> Vec<Scored> {
+pub fn rank(ctx: &OutputCtx, inst: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty: f64) -> Vec<Scored> {
     let mut out: Vec<Scored> = score(ctx, r, None, split, penalty).into_iter().collect();
     for &i in inputs {
         let mut terms = grid(ctx, i, split.fit.clone());
@@ -105,7 +132,7 @@ pub fn rank(ctx: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty
             terms.push(Term::Bilinear(Vec::new()));
         }
         for t in terms {
-            if let Some(f) = fit_term(ctx, r, i, t, split.fit.clone()) {
+            if let Some(f) = fit_term(ctx, inst, r, i, t, split.fit.clone()) {
                 out.extend(score(ctx, r, Some(f), split, penalty));
             }
         }
