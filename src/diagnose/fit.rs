@@ -8,13 +8,18 @@ use nalgebra::{DMatrix, DVector};
 /// over-parameterised model, a constant regressor) give the minimum-norm solution instead of
 /// garbage. Returns `None` when a value is not finite.
 pub fn least_squares(cols: &[&[f64]], y: &[f64], rows: std::ops::Range<usize>) -> Option<Vec<f64>> {
+    least_squares_rows(cols, y, &rows.collect::<Vec<_>>())
+}
+
+/// [`least_squares`] over any set of rows.
+pub fn least_squares_rows(cols: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Vec<f64>> {
     let p = cols.len();
     if p == 0 {
         return Some(Vec::new());
     }
     let n = rows.len();
-    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows.start + r]);
-    let b = DVector::from_fn(n, |r, _| y[rows.start + r]);
+    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows[r]]);
+    let b = DVector::from_fn(n, |r, _| y[rows[r]]);
     let svd = x.svd(true, true);
     let smax = svd.singular_values.max();
     if !smax.is_finite() {
@@ -29,8 +34,9 @@ pub fn least_squares(cols: &[&[f64]], y: &[f64], rows: std::ops::Range<usize>) -
 /// picks the candidate column whose part orthogonal to the already chosen ones explains the most
 /// of `y` (the error reduction ratio, ERR), until `max_terms` are chosen or the best ERR falls
 /// below `min_err`. Returns the chosen indices with their ERR, in order of choice.
-pub fn frols(cands: &[Vec<f64>], y: &[f64], rows: std::ops::Range<usize>, max_terms: usize, min_err: f64) -> Vec<(usize, f64)> {
-    let yy: Vec<f64> = y[rows.clone()].to_vec();
+pub fn frols(cands: &[Vec<f64>], y: &[f64], rows: &[usize], max_terms: usize, min_err: f64) -> Vec<(usize, f64)> {
+    let pick = |c: &[f64]| -> Vec<f64> { rows.iter().map(|&t| c[t]).collect() };
+    let yy: Vec<f64> = pick(y);
     let sigma = dot(&yy, &yy);
     if sigma == 0.0 {
         return Vec::new();
@@ -43,13 +49,14 @@ pub fn frols(cands: &[Vec<f64>], y: &[f64], rows: std::ops::Range<usize>, max_te
             if chosen.iter().any(|&(k, _)| k == m) {
                 continue;
             }
-            let mut w: Vec<f64> = c[rows.clone()].to_vec();
+            let cr = pick(c);
+            let mut w: Vec<f64> = cr.clone();
             for q in &basis {
                 let a = dot(q, &w) / dot(q, q);
                 w.iter_mut().zip(q).for_each(|(wi, qi)| *wi -= a * qi);
             }
             let ww = dot(&w, &w);
-            if ww <= 1e-12 * dot(&c[rows.clone()], &c[rows.clone()]).max(f64::MIN_POSITIVE) {
+            if ww <= 1e-12 * dot(&cr, &cr).max(f64::MIN_POSITIVE) {
                 continue;
             }
             let g = dot(&w, &yy);
@@ -116,7 +123,8 @@ mod tests {
     fn frols_picks_the_true_terms_first() {
         let c: Vec<Vec<f64>> = (0..5).map(|k| (0..200).map(|t| ((t * (k + 2)) as f64 * 0.7).sin()).collect()).collect();
         let y: Vec<f64> = (0..200).map(|t| 3.0 * c[3][t] + 0.5 * c[1][t]).collect();
-        let chosen = frols(&c, &y, 0..200, 4, 1e-6);
+        let rows: Vec<usize> = (0..200).collect();
+        let chosen = frols(&c, &y, &rows, 4, 1e-6);
         assert_eq!(chosen[0].0, 3);
         assert_eq!(chosen[1].0, 1);
         assert_eq!(chosen.len(), 2);
@@ -136,15 +144,15 @@ mod tests {
 /// disturbance back through feedback and least squares is biased; instruments built from the
 /// dither-driven part of the inputs are independent of the disturbance, so the estimate is not.
 /// With `Z = X` this is least squares.
-pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: std::ops::Range<usize>) -> Option<Vec<f64>> {
+pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Vec<f64>> {
     let p = cols.len();
     if p == 0 || inst.len() != p {
         return None;
     }
     let n = rows.len();
-    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows.start + r]);
-    let z = DMatrix::from_fn(n, p, |r, c| inst[c][rows.start + r]);
-    let b = DVector::from_fn(n, |r, _| y[rows.start + r]);
+    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows[r]]);
+    let z = DMatrix::from_fn(n, p, |r, c| inst[c][rows[r]]);
+    let b = DVector::from_fn(n, |r, _| y[rows[r]]);
     let zx = z.transpose() * &x;
     let zy = z.transpose() * b;
     let svd = zx.svd(true, true);

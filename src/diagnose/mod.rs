@@ -151,7 +151,15 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let w0 = opts.warmup;
     let n_fit = w0 + (0.7 * (n_train - w0) as f64) as usize;
     let features = input.excitations.as_ref().map(|e| dither_features(&e.iter().map(|s| s.values).collect::<Vec<_>>()));
-    let split = Split { features, fit: w0..n_fit, validate: n_fit..n_train, train: w0..n_train };
+    // Three contiguous folds of the training part: each block validates a fit on the other two.
+    let edges: Vec<usize> = (0..=3).map(|k| w0 + k * (n_train - w0) / 3).collect();
+    let folds = (0..3)
+        .map(|k| {
+            let fit: Vec<usize> = (w0..n_train).filter(|&t| t < edges[k] || t >= edges[k + 1]).collect();
+            (fit, edges[k]..edges[k + 1])
+        })
+        .collect();
+    let split = Split { features, fit: w0..n_fit, validate: n_fit..n_train, train: w0..n_train, folds };
 
     let residuals: Vec<Vec<f64>> =
         input.outputs.iter().zip(&input.simulated).map(|(y, s)| y.values.iter().zip(s.values).map(|(a, b)| a - b).collect()).collect();
@@ -355,11 +363,14 @@ fn decide(
         });
     }
     let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
-    let best = best.filter(|s| val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
+    // Open loop: the winner must also raise the plain validation FIT. Closed loop: the plain FIT
+    // can fall for the true correction (the nominal error partly cancels the disturbance through
+    // feedback), so the dither-projected score alone decides.
+    let best = best.filter(|s| split.features.is_some() || val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
     let out_name = input.outputs[j].name;
     if let Some(f) = best.and_then(|b| b.fitted.clone()) {
         // Refit the chosen hypothesis (its grid values fixed) on the whole training part.
-        let refit = select::fit_term(ctx, inst, r, f.input, f.term.clone(), split.train.clone()).unwrap_or(f);
+        let refit = select::fit_term(ctx, inst, r, f.input, f.term.clone(), &split.train.clone().collect::<Vec<_>>()).unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);

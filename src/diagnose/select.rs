@@ -26,10 +26,13 @@ pub struct Split {
     /// Dither features on which a closed-loop score is projected (`None`: open loop, the plain
     /// validation error is the score).
     pub features: Option<Vec<Vec<f64>>>,
-    /// Rows used to fit during selection.
+    /// Rows used to fit during selection (the first 70 % of the training part; grids and
+    /// feature sets are built on them).
     pub fit: std::ops::Range<usize>,
     /// Rows used to score during selection (the end of the training part).
     pub validate: std::ops::Range<usize>,
+    /// Cross-validation folds within the training part: (fit rows, validation block).
+    pub folds: Vec<(Vec<usize>, std::ops::Range<usize>)>,
     /// The whole training part (the final refit).
     pub train: std::ops::Range<usize>,
 }
@@ -43,16 +46,16 @@ pub fn fit_term(
     r: &[f64],
     input: usize,
     term: Term,
-    rows: std::ops::Range<usize>,
+    rows: &[usize],
 ) -> Option<FittedTerm> {
     let term = match term {
         Term::Bilinear(ref pool) if pool.is_empty() => {
             // FROLS chooses up to two products from the pool on these rows.
             let pool = ctx.bilinear_pool(input);
             let cols = inst.columns(input, &Term::Bilinear(pool.clone()));
-            let rc: Vec<f64> = centre_on(r, &rows);
-            let cc: Vec<Vec<f64>> = cols.iter().map(|c| centre_on(c, &rows)).collect();
-            let chosen = frols(&cc, &rc, rows.clone(), 2, 0.01);
+            let rc: Vec<f64> = centre_on(r, rows);
+            let cc: Vec<Vec<f64>> = cols.iter().map(|c| centre_on(c, rows)).collect();
+            let chosen = frols(&cc, &rc, rows, 2, 0.01);
             if chosen.is_empty() {
                 return None;
             }
@@ -67,7 +70,7 @@ pub fn fit_term(
     let zcols = inst.columns(input, &term);
     let mut zrefs: Vec<&[f64]> = vec![&ones];
     zrefs.extend(zcols.iter().map(|c| c.as_slice()));
-    let th = instrumental(&refs, &zrefs, r, rows.clone())?;
+    let th = instrumental(&refs, &zrefs, r, rows)?;
     let mut f = FittedTerm { input, term, intercept: th[0], coefs: th[1..].to_vec() };
     if f.term.is_recursive() {
         // The linearised coefficient used the recorded output; refine its scale in simulation
@@ -77,8 +80,8 @@ pub fn fit_term(
         for m in [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0] {
             let mut g = FittedTerm { intercept: 0.0, coefs: vec![base * m], ..f.clone() };
             let Some(c) = correction(ctx, &g) else { continue };
-            g.intercept = rows.clone().map(|t| r[t] - c[t]).sum::<f64>() / rows.len() as f64;
-            let sse: f64 = rows.clone().map(|t| (r[t] - c[t] - g.intercept).powi(2)).sum();
+            g.intercept = rows.iter().map(|&t| r[t] - c[t]).sum::<f64>() / rows.len() as f64;
+            let sse: f64 = rows.iter().map(|&t| (r[t] - c[t] - g.intercept).powi(2)).sum();
             if best.as_ref().is_none_or(|b| sse < b.0) {
                 best = Some((sse, g));
             }
@@ -88,33 +91,41 @@ pub fn fit_term(
     Some(f)
 }
 
-fn centre_on(x: &[f64], rows: &std::ops::Range<usize>) -> Vec<f64> {
-    let m = rows.clone().map(|t| x[t]).sum::<f64>() / rows.len().max(1) as f64;
+fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
+    let m = rows.iter().map(|&t| x[t]).sum::<f64>() / rows.len().max(1) as f64;
     x.iter().map(|v| v - m).collect()
 }
 
 /// Scores a fitted term on the validation rows.
-pub fn score(ctx: &OutputCtx, r: &[f64], f: Option<FittedTerm>, split: &Split, penalty: f64) -> Option<Scored> {
+pub fn score(
+    ctx: &OutputCtx,
+    r: &[f64],
+    f: Option<FittedTerm>,
+    fit_rows: &[usize],
+    validate: std::ops::Range<usize>,
+    features: Option<&Vec<Vec<f64>>>,
+    penalty: f64,
+) -> Option<Scored> {
     let (c, complexity) = match &f {
         Some(f) => (correction(ctx, f)?, 1 + f.coefs.len() + f.term.grid_params()),
         None => {
-            let m = split.fit.clone().map(|t| r[t]).sum::<f64>() / split.fit.len() as f64;
+            let m = fit_rows.iter().map(|&t| r[t]).sum::<f64>() / fit_rows.len() as f64;
             (vec![m; r.len()], 1)
         }
     };
-    let n = split.validate.len() as f64;
+    let n = validate.len() as f64;
     let e: Vec<f64> = (0..r.len()).map(|t| r[t] - c[t]).collect();
-    let (sse, dof) = match &split.features {
+    let (sse, dof) = match features {
         // In a closed loop the disturbance reaches the inputs through feedback, so a correction
         // can lower the plain error by cancelling disturbance through the inputs. Only the part
         // of the error the dithers can explain counts: its projection on the dither features.
         Some(z) => {
             let refs: Vec<&[f64]> = z.iter().map(|c| c.as_slice()).collect();
-            let th = least_squares(&refs, &e, split.validate.clone())?;
-            let proj: f64 = split.validate.clone().map(|t| refs.iter().zip(&th).map(|(c, b)| c[t] * b).sum::<f64>().powi(2)).sum();
+            let th = least_squares(&refs, &e, validate.clone())?;
+            let proj: f64 = validate.clone().map(|t| refs.iter().zip(&th).map(|(c, b)| c[t] * b).sum::<f64>().powi(2)).sum();
             (proj, z.len() as f64)
         }
-        None => (split.validate.clone().map(|t| e[t].powi(2)).sum(), n),
+        None => (validate.clone().map(|t| e[t].powi(2)).sum(), n),
     };
     if !sse.is_finite() {
         return None;
@@ -124,16 +135,51 @@ pub fn score(ctx: &OutputCtx, r: &[f64], f: Option<FittedTerm>, split: &Split, p
 }
 
 /// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
+///
+/// In a closed loop the projection features are the dither features of `split` plus the
+/// instrument columns (functions of the dither-driven inputs only, hence free of disturbance) of
+/// every class on every flagged input at a few grid values: the directions along which the
+/// hypotheses differ, so the projected score can tell them apart.
 pub fn rank(ctx: &OutputCtx, inst: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty: f64) -> Vec<Scored> {
-    let mut out: Vec<Scored> = score(ctx, r, None, split, penalty).into_iter().collect();
+    let mut split = split.clone();
+    if let Some(z) = split.features.as_mut() {
+        for &i in inputs {
+            for (k, t) in grid(ctx, i, split.fit.clone()).iter().enumerate() {
+                if k % 3 == 0 && !t.is_recursive() {
+                    z.extend(inst.columns(i, t));
+                }
+            }
+        }
+    }
+    let split = &split;
+    // Each hypothesis: fitted and scored on every fold; its score is the sum over folds.
+    let fold_score = |f: Option<&FittedTerm>| -> Option<(f64, f64, usize)> {
+        let mut total = (0.0, 0.0, 0);
+        for (fit_rows, val) in &split.folds {
+            let fitted = match f {
+                Some(f) => Some(fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?),
+                None => None,
+            };
+            let s = score(ctx, r, fitted, fit_rows, val.clone(), split.features.as_ref(), penalty)?;
+            total = (total.0 + s.score, total.1 + s.sse, s.complexity);
+        }
+        Some(total)
+    };
+    let fit_rows: Vec<usize> = split.fit.clone().collect();
+    let mut out: Vec<Scored> = Vec::new();
+    if let Some((score, sse, complexity)) = fold_score(None) {
+        out.push(Scored { fitted: None, sse, complexity, score });
+    }
     for &i in inputs {
         let mut terms = grid(ctx, i, split.fit.clone());
         if ctx.has_channel[i] {
             terms.push(Term::Bilinear(Vec::new()));
         }
         for t in terms {
-            if let Some(f) = fit_term(ctx, inst, r, i, t, split.fit.clone()) {
-                out.extend(score(ctx, r, Some(f), split, penalty));
+            // The bilinear products are chosen once by FROLS on the fit rows, then kept fixed.
+            let Some(f) = fit_term(ctx, inst, r, i, t, &fit_rows) else { continue };
+            if let Some((score, sse, complexity)) = fold_score(Some(&f)) {
+                out.push(Scored { fitted: Some(f), sse, complexity, score });
             }
         }
     }
