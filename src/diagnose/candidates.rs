@@ -103,15 +103,17 @@ pub enum Term {
     TimeConstant { p0: f64, p1: f64 },
     /// A first-order lag `(1−p) q^−d/(1 − p q^−1)` of the input where the model has none.
     MissingCoupling { pole: f64, delay: usize },
-    /// Dead zone of half-width `w` around the operating point.
-    DeadZone(f64),
+    /// Dead zone of half-width `w` around `centre` (a deviation from the input's median).
+    DeadZone { centre: f64, w: f64 },
     /// Input clipped to `[lo, hi]` (deviations from the operating point; ±∞ for one side).
     SaturationIn { lo: f64, hi: f64 },
     /// Output clipped to `[lo, hi]` (absolute values).
     SaturationOut { lo: f64, hi: f64 },
-    /// Square of the input deviation through the channel.
+    /// Square of the input deviation through the channel, with a linear term so that the
+    /// parabola's centre is free (`q(u − c)² = qu² − 2qcu + qc²`).
     Quadratic,
-    /// Cube of the input deviation through the channel.
+    /// Cube of the input deviation through the channel, with square and linear terms (a cubic
+    /// about a free centre).
     Cubic,
     /// Cube of the output deviation fed back through the channel (a hardening spring).
     CubicOut,
@@ -133,7 +135,7 @@ impl Term {
             Term::DeadTime(_) => Physics::DeadTime,
             Term::TimeConstant { .. } => Physics::TimeConstant,
             Term::MissingCoupling { .. } => Physics::MissingCoupling,
-            Term::DeadZone(_) => Physics::DeadZone,
+            Term::DeadZone { .. } => Physics::DeadZone,
             Term::SaturationIn { .. } | Term::SaturationOut { .. } => Physics::Saturation,
             Term::Quadratic => Physics::Quadratic,
             Term::Cubic | Term::CubicOut => Physics::Cubic,
@@ -158,13 +160,30 @@ impl Term {
     pub fn grid_params(&self) -> usize {
         match self {
             Term::Gain | Term::Quadratic | Term::Cubic | Term::CubicOut => 0,
-            Term::MissingCoupling { .. } => 2,
+            Term::MissingCoupling { .. } | Term::DeadZone { .. } => 2,
             Term::SaturationIn { lo, hi } | Term::SaturationOut { lo, hi } => {
                 usize::from(lo.is_finite()) + usize::from(hi.is_finite())
             }
             Term::Bilinear(t) => t.len(),
             _ => 1,
         }
+    }
+
+    /// Whether the physics fixes the term's weight at 1: the plant is the model applied to
+    /// `φ(u)` (a dead zone, a limit, play, a longer delay, a lead–lag, a sensor map), so the
+    /// correction is exactly `G0(φ(u) − u)` and only the grid value is free. A free weight would
+    /// let, say, a scaled dead zone imitate a gain change.
+    pub fn fixed_weight(&self) -> bool {
+        matches!(
+            self,
+            Term::DeadTime(_)
+                | Term::TimeConstant { .. }
+                | Term::DeadZone { .. }
+                | Term::SaturationIn { .. }
+                | Term::SaturationOut { .. }
+                | Term::Backlash(_)
+                | Term::AbsSensor(_)
+        )
     }
 
     /// Whether the correction feeds back its own output (simulated step by step).
@@ -214,13 +233,17 @@ impl OutputCtx {
                 b[*delay] = 1.0 - pole;
                 vec![filter(&b, &[*pole], u)]
             }
-            Term::DeadZone(w) => vec![g0(&u.iter().map(|v| -v.clamp(-w, *w)).collect::<Vec<_>>())],
+            Term::DeadZone { centre, w } => vec![g0(&u.iter().map(|v| -(v - centre).clamp(-w, *w)).collect::<Vec<_>>())],
             Term::SaturationIn { lo, hi } => {
                 vec![g0(&u.iter().map(|v| v.clamp(*lo, *hi) - v).collect::<Vec<_>>())]
             }
             Term::SaturationOut { lo, hi } => vec![self.s.iter().map(|v| v.clamp(*lo, *hi) - v).collect()],
-            Term::Quadratic => vec![g0(&u.iter().map(|v| v * v).collect::<Vec<_>>())],
-            Term::Cubic => vec![g0(&u.iter().map(|v| v * v * v).collect::<Vec<_>>())],
+            Term::Quadratic => vec![g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()), self.s_channel[i].clone()],
+            Term::Cubic => vec![
+                g0(&u.iter().map(|v| v * v * v).collect::<Vec<_>>()),
+                g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()),
+                self.s_channel[i].clone(),
+            ],
             Term::CubicOut => vec![g0(&self.y.iter().map(|v| (v - self.y0).powi(3)).collect::<Vec<_>>())],
             Term::Bilinear(pairs) => pairs
                 .iter()
@@ -234,7 +257,7 @@ impl OutputCtx {
                 vec![g0(&p.iter().zip(u).map(|(a, b)| a - b).collect::<Vec<_>>())]
             }
             Term::Coulomb { on_change } => vec![g0(&coulomb_input(&self.y, *on_change))],
-            Term::AbsSensor(o) => vec![self.s.iter().map(|v| (v - o).abs()).collect(), self.s.clone()],
+            Term::AbsSensor(o) => vec![self.s.iter().map(|v| (v - o).abs() + o - v).collect()],
         }
     }
 
@@ -317,23 +340,29 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
         return out;
     }
     let u = &ctx.ut[i][rows.clone()];
-    let absu: Vec<f64> = u.iter().map(|v| v.abs()).collect();
     let s = &ctx.s[rows.clone()];
     out.push(Term::Gain);
     out.extend((1..=8).map(Term::DeadTime));
     let p0 = ctx.model.dominant_pole(i, 2000);
     let tau0 = -1.0 / p0.ln();
-    for rho in [0.4, 0.5, 0.6, 0.7, 0.8, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0] {
+    for rho in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0] {
         out.push(Term::TimeConstant { p0, p1: (-1.0 / (rho * tau0)).exp() });
     }
-    for q in [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8] {
-        out.push(Term::DeadZone(quantile(&absu, q)));
+    for cq in [0.3, 0.4, 0.5, 0.6, 0.7] {
+        let centre = quantile(u, cq);
+        let dev: Vec<f64> = u.iter().map(|v| (v - centre).abs()).collect();
+        for q in [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8] {
+            out.push(Term::DeadZone { centre, w: quantile(&dev, q) });
+        }
     }
-    for q in [0.5, 0.6, 0.7, 0.8, 0.9, 0.95] {
+    for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
         out.push(Term::SaturationIn { lo: f64::NEG_INFINITY, hi: quantile(u, q) });
         out.push(Term::SaturationIn { lo: quantile(u, 1.0 - q), hi: f64::INFINITY });
-        let a = quantile(&absu, q);
-        out.push(Term::SaturationIn { lo: -a, hi: a });
+        for cq in [0.4, 0.5, 0.6] {
+            let c = quantile(u, cq);
+            let a = quantile(&u.iter().map(|v| (v - c).abs()).collect::<Vec<_>>(), q);
+            out.push(Term::SaturationIn { lo: c - a, hi: c + a });
+        }
         out.push(Term::SaturationOut { lo: f64::NEG_INFINITY, hi: quantile(s, q) });
         out.push(Term::SaturationOut { lo: quantile(s, 1.0 - q), hi: f64::INFINITY });
     }
@@ -341,7 +370,7 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     out.push(Term::Cubic);
     out.push(Term::CubicOut);
     let sd = (u.iter().map(|v| v * v).sum::<f64>() / u.len().max(1) as f64).sqrt();
-    for f in [0.1, 0.2, 0.4, 0.6, 0.8, 1.0, 1.3, 1.6, 2.0] {
+    for f in [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.3, 1.6, 2.0] {
         out.push(Term::Backlash(f * sd));
     }
     out.push(Term::Coulomb { on_change: false });

@@ -24,7 +24,6 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
             let d0 = ctx.model.delay(i) as f64 * ts;
             p.insert("extra_dead_time_s".into(), *d as f64 * ts);
             p.insert("dead_time_s".into(), d0 + *d as f64 * ts);
-            p.insert("weight".into(), th);
             format!("{output} answers {input} {} s later than the model says (dead time {} s, not {} s)", fmt(*d as f64 * ts), fmt(d0 + *d as f64 * ts), fmt(d0))
         }
         Term::TimeConstant { p0, p1 } => {
@@ -32,7 +31,6 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
             p.insert("time_constant_s".into(), t1);
             p.insert("nominal_time_constant_s".into(), t0);
             p.insert("ratio".into(), t1 / t0);
-            p.insert("weight".into(), th);
             format!("the {input}→{output} response is {} than modelled: time constant about {} s instead of {} s", if t1 > t0 { "slower" } else { "faster" }, fmt(t1), fmt(t0))
         }
         Term::MissingCoupling { pole, delay } => {
@@ -42,11 +40,10 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
             p.insert("dead_time_s".into(), *delay as f64 * ts);
             format!("{output} responds to {input} although the model says it does not: gain {:.3}, time constant {} s, dead time {} s", th, fmt(tau), fmt(*delay as f64 * ts))
         }
-        Term::DeadZone(w) => {
+        Term::DeadZone { centre, w } => {
             p.insert("width".into(), *w);
-            p.insert("centre".into(), u0);
-            p.insert("weight".into(), th);
-            format!("MV {input} has no effect on {output} inside {} ± {} (a dead zone)", fmt(u0), fmt(*w))
+            p.insert("centre".into(), u0 + centre);
+            format!("MV {input} has no effect on {output} inside {} ± {} (a dead zone)", fmt(u0 + centre), fmt(*w))
         }
         Term::SaturationIn { lo, hi } => {
             let mut parts = Vec::new();
@@ -58,7 +55,6 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
                 p.insert("lower_limit".into(), u0 + lo);
                 parts.push(format!("below {}", fmt(u0 + lo)));
             }
-            p.insert("weight".into(), th);
             format!("MV {input} stops acting on {output} {} (an actuator limit)", parts.join(" and "))
         }
         Term::SaturationOut { lo, hi } => {
@@ -71,13 +67,13 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
                 p.insert("lower_limit".into(), *lo);
                 parts.push(format!("below {}", fmt(*lo)));
             }
-            p.insert("weight".into(), th);
             format!("{output} cannot go {} while the model's can (an overflow or clip)", parts.join(" or "))
         }
         Term::Quadratic => {
+            let c = u0 - f.coefs.get(1).copied().unwrap_or(0.0) / (2.0 * th);
             p.insert("coefficient".into(), th);
-            p.insert("centre".into(), u0);
-            format!("{output} responds to the square of {input}'s move: an extra {:.3}·({input} − {})² through the channel's dynamics", th, fmt(u0))
+            p.insert("centre".into(), c);
+            format!("{output} responds to the square of {input}'s move: an extra {:.3}·({input} − {})² through the channel's dynamics", th, fmt(c))
         }
         Term::Cubic => {
             p.insert("coefficient".into(), th);
@@ -102,7 +98,6 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
         }
         Term::Backlash(w) => {
             p.insert("width".into(), *w);
-            p.insert("weight".into(), th);
             format!("MV {input} acts on {output} through play of {} (backlash): reversals are lost until the input has moved that far", fmt(*w))
         }
         Term::Coulomb { on_change } => {
@@ -111,7 +106,6 @@ pub fn describe(ctx: &OutputCtx, f: &FittedTerm, input: &str, output: &str, ts: 
         }
         Term::AbsSensor(o) => {
             p.insert("zero_offset".into(), *o);
-            p.insert("scale".into(), th);
             format!("the {output} sensor reads the absolute value of the signal (|x − {}|): it cannot see the sign", fmt(*o))
         }
     };

@@ -64,6 +64,11 @@ pub fn fit_term(
         t => t,
     };
     let cols = ctx.columns(input, &term);
+    if term.fixed_weight() {
+        let col = cols.first()?;
+        let intercept = rows.iter().map(|&t| r[t] - col[t]).sum::<f64>() / rows.len().max(1) as f64;
+        return intercept.is_finite().then_some(FittedTerm { input, term, intercept, coefs: vec![1.0] });
+    }
     let ones = vec![1.0; r.len()];
     let mut refs: Vec<&[f64]> = vec![&ones];
     refs.extend(cols.iter().map(|c| c.as_slice()));
@@ -107,7 +112,10 @@ pub fn score(
     penalty: f64,
 ) -> Option<Scored> {
     let (c, complexity) = match &f {
-        Some(f) => (correction(ctx, f)?, 1 + f.coefs.len() + f.term.grid_params()),
+        Some(f) => {
+            let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
+            (correction(ctx, f)?, 1 + free + f.term.grid_params())
+        }
         None => {
             let m = fit_rows.iter().map(|&t| r[t]).sum::<f64>() / fit_rows.len() as f64;
             (vec![m; r.len()], 1)
