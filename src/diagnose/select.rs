@@ -4,7 +4,7 @@
 //! intercept-only correction is the null hypothesis every term must beat.
 
 use super::candidates::{OutputCtx, Term, grid};
-use super::fit::{frols, instrumental, least_squares};
+use super::fit::{frols, instrumental};
 use super::simulate::{FittedTerm, correction};
 
 /// One scored hypothesis.
@@ -23,8 +23,8 @@ pub struct Scored {
 /// Splits of the record.
 #[derive(Debug, Clone)]
 pub struct Split {
-    /// Dither features on which a closed-loop score is projected (`None`: open loop, the plain
-    /// validation error is the score).
+    /// Dither features (`None`: open loop). In a closed loop hypotheses are scored on the
+    /// dither-driven inputs.
     pub features: Option<Vec<Vec<f64>>>,
     /// Rows used to fit during selection (the first 70 % of the training part; grids and
     /// feature sets are built on them).
@@ -101,20 +101,40 @@ fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
     x.iter().map(|v| v - m).collect()
 }
 
-/// Scores a fitted term on the validation rows.
+/// Scores a fitted term on the validation rows: `n·ln(SSE/n) + penalty·k·ln(n)`.
+///
+/// Open loop (`inst` is `None`): SSE of the residual minus the correction. Closed loop: the
+/// correction is evaluated on the dither-driven inputs (`inst`) instead of the recorded ones.
+/// The recorded inputs carry the disturbance back through feedback, so a correction of the
+/// recorded inputs can lower the error by cancelling disturbance rather than by explaining the
+/// plant (a gain change imitating a dead zone, say). A correction of the dither-driven inputs is
+/// independent of the disturbance, so the disturbance adds the same amount to every hypothesis'
+/// error and the comparison is fair.
+#[allow(clippy::too_many_arguments)]
 pub fn score(
     ctx: &OutputCtx,
+    inst: Option<&OutputCtx>,
     r: &[f64],
     f: Option<FittedTerm>,
     fit_rows: &[usize],
     validate: std::ops::Range<usize>,
-    features: Option<&Vec<Vec<f64>>>,
     penalty: f64,
 ) -> Option<Scored> {
     let (c, complexity) = match &f {
         Some(f) => {
             let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
-            (correction(ctx, f)?, 1 + free + f.term.grid_params())
+            let c = match inst {
+                Some(i) => {
+                    // Re-centre the intercept for the dither-driven evaluation on the fit rows.
+                    let mut g = f.clone();
+                    g.intercept = 0.0;
+                    let c0 = correction(i, &g)?;
+                    g.intercept = fit_rows.iter().map(|&t| r[t] - c0[t]).sum::<f64>() / fit_rows.len() as f64;
+                    c0.iter().map(|v| v + g.intercept).collect()
+                }
+                None => correction(ctx, f)?,
+            };
+            (c, 1 + free + f.term.grid_params())
         }
         None => {
             let m = fit_rows.iter().map(|&t| r[t]).sum::<f64>() / fit_rows.len() as f64;
@@ -122,44 +142,18 @@ pub fn score(
         }
     };
     let n = validate.len() as f64;
-    let e: Vec<f64> = (0..r.len()).map(|t| r[t] - c[t]).collect();
-    let (sse, dof) = match features {
-        // In a closed loop the disturbance reaches the inputs through feedback, so a correction
-        // can lower the plain error by cancelling disturbance through the inputs. Only the part
-        // of the error the dithers can explain counts: its projection on the dither features.
-        Some(z) => {
-            let refs: Vec<&[f64]> = z.iter().map(|c| c.as_slice()).collect();
-            let th = least_squares(&refs, &e, validate.clone())?;
-            let proj: f64 = validate.clone().map(|t| refs.iter().zip(&th).map(|(c, b)| c[t] * b).sum::<f64>().powi(2)).sum();
-            (proj, z.len() as f64)
-        }
-        None => (validate.clone().map(|t| e[t].powi(2)).sum(), n),
-    };
+    let sse: f64 = validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum();
     if !sse.is_finite() {
         return None;
     }
-    let score = dof * (sse / dof).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
+    let score = n * (sse / n).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
     Some(Scored { fitted: f, sse, complexity, score })
 }
 
 /// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
 ///
-/// In a closed loop the projection features are the dither features of `split` plus the
-/// instrument columns (functions of the dither-driven inputs only, hence free of disturbance) of
-/// every class on every flagged input at a few grid values: the directions along which the
-/// hypotheses differ, so the projected score can tell them apart.
+/// Each is scored by 3-fold cross-validation within the training part (see [`score`]).
 pub fn rank(ctx: &OutputCtx, inst: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty: f64) -> Vec<Scored> {
-    let mut split = split.clone();
-    if let Some(z) = split.features.as_mut() {
-        for &i in inputs {
-            for (k, t) in grid(ctx, i, split.fit.clone()).iter().enumerate() {
-                if k % 3 == 0 && !t.is_recursive() {
-                    z.extend(inst.columns(i, t));
-                }
-            }
-        }
-    }
-    let split = &split;
     // Each hypothesis: fitted and scored on every fold; its score is the sum over folds.
     let fold_score = |f: Option<&FittedTerm>| -> Option<(f64, f64, usize)> {
         let mut total = (0.0, 0.0, 0);
@@ -168,7 +162,8 @@ pub fn rank(ctx: &OutputCtx, inst: &OutputCtx, r: &[f64], inputs: &[usize], spli
                 Some(f) => Some(fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?),
                 None => None,
             };
-            let s = score(ctx, r, fitted, fit_rows, val.clone(), split.features.as_ref(), penalty)?;
+            let closed = split.features.is_some().then_some(inst);
+            let s = score(ctx, closed, r, fitted, fit_rows, val.clone(), penalty)?;
             total = (total.0 + s.score, total.1 + s.sse, s.complexity);
         }
         Some(total)
