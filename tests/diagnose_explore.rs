@@ -19,9 +19,25 @@ fn explore() {
             .report
             .findings
             .iter()
-            .map(|f| format!("{}→{} {} ({:?}) {:.1}→{:.1}", f.input, f.output, f.physics.name(), f.parameters, f.fit_before_pct, f.fit_after_pct))
+            .map(|f| {
+                format!(
+                    "{}→{} {} ({:?}) {:.1}→{:.1}",
+                    f.input,
+                    f.output,
+                    f.physics.name(),
+                    f.parameters,
+                    f.fit_before_pct,
+                    f.fit_after_pct
+                )
+            })
             .collect();
-        let sig: Vec<String> = d.report.channels.iter().filter(|c| c.significant).map(|c| format!("{}→{}{}", c.input, c.output, if c.ccf_significant { "(ccf)" } else { "" })).collect();
+        let sig: Vec<String> = d
+            .report
+            .channels
+            .iter()
+            .filter(|c| c.significant)
+            .map(|c| format!("{}→{}{}", c.input, c.output, if c.ccf_significant { "(ccf)" } else { "" }))
+            .collect();
         eprintln!(
             "{} [{}] ratio {:.2} | sig {:?} | {:?} | holdout {:?}→{:?} | {:.1}s",
             spec.name,
@@ -34,7 +50,12 @@ fn explore() {
             t.elapsed().as_secs_f64()
         );
         if let Some(f) = d.report.findings.first() {
-            let tr: Vec<String> = f.tried.iter().take(5).map(|t| format!("{} {:.1}/{:.2}", t.physics.name(), t.score_vs_null, t.validation_gain_pct)).collect();
+            let tr: Vec<String> = f
+                .tried
+                .iter()
+                .take(5)
+                .map(|t| format!("{} {:.1}/{:.2}", t.physics.name(), t.score_vs_null, t.validation_gain_pct))
+                .collect();
             eprintln!("    tried {:?}", tr);
         }
     }

@@ -10,7 +10,16 @@ use mpmwatch::sim::Excitation;
 use mpmwatch::sim::scenarios::{Effect, ScenarioSpec, diagnose_record, run};
 
 fn spec(effect: Effect, excitation: Excitation, seed: u64) -> ScenarioSpec {
-    ScenarioSpec { name: "t".into(), effect, size: 1, channel: (0, 0), excitation, n: 2000, seed, target_ratio: 0.6 }
+    ScenarioSpec {
+        name: "t".into(),
+        effect,
+        size: 1,
+        channel: (0, 0),
+        excitation,
+        n: 2000,
+        seed,
+        target_ratio: 0.6,
+    }
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -75,12 +84,25 @@ fn report_json_matches_design_4_5() {
     }
     assert!(["mismatch", "clean", "implicated_by_feedback"].contains(&ch["verdict"].as_str().unwrap()));
     let f = &v["findings"][0];
-    for k in ["input", "output", "physics", "acts_on", "summary", "parameters", "fit_before_pct", "fit_after_pct"] {
+    for k in
+        ["input", "output", "physics", "acts_on", "summary", "parameters", "fit_before_pct", "fit_after_pct"]
+    {
         assert!(!f[k].is_null(), "findings[0].{k} missing: {f}");
     }
     let vocab = [
-        "gain", "time_constant", "dead_time", "missing_coupling", "dead_zone", "saturation", "quadratic", "cubic",
-        "bilinear", "backlash", "coulomb_friction", "abs_sensor", "unexplained",
+        "gain",
+        "time_constant",
+        "dead_time",
+        "missing_coupling",
+        "dead_zone",
+        "saturation",
+        "quadratic",
+        "cubic",
+        "bilinear",
+        "backlash",
+        "coulomb_friction",
+        "abs_sensor",
+        "unexplained",
     ];
     assert!(vocab.contains(&f["physics"].as_str().unwrap()), "{f}");
     assert!(["input", "output"].contains(&f["acts_on"].as_str().unwrap()));

@@ -55,14 +55,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let (ci, cj) = spec.channel;
         let truth_in = format!("u{}", ci + 1);
         let truth_out = format!("y{}", cj + 1);
-        let finding = dg.report.findings.iter().find(|f| f.physics != Physics::Unexplained).or(dg.report.findings.first());
-        let found_channel = finding.map(|f| format!("{}→{}", f.input, f.output)).unwrap_or_else(|| "none".into());
+        let finding = dg
+            .report
+            .findings
+            .iter()
+            .find(|f| f.physics != Physics::Unexplained)
+            .or(dg.report.findings.first());
+        let found_channel =
+            finding.map(|f| format!("{}→{}", f.input, f.output)).unwrap_or_else(|| "none".into());
         let physics = finding.map(|f| f.physics.name().to_string()).unwrap_or_else(|| "none".into());
-        let ccf = dg.report.channels.iter().find(|c| c.input == truth_in && c.output == truth_out).is_some_and(|c| c.ccf_significant);
+        let ccf = dg
+            .report
+            .channels
+            .iter()
+            .find(|c| c.input == truth_in && c.output == truth_out)
+            .is_some_and(|c| c.ccf_significant);
         let y = &truth_out;
         let (fb, fa) = (dg.report.holdout.fit_before_pct[y], dg.report.holdout.fit_after_pct[y]);
         let right_channel = finding.is_some_and(|f| f.input == truth_in && f.output == truth_out);
-        let right_physics = finding.is_some_and(|f| f.physics.name() == spec.effect.physics() && right_channel);
+        let right_physics =
+            finding.is_some_and(|f| f.physics.name() == spec.effect.physics() && right_channel);
         if spec.effect.is_mismatch() {
             total += 1;
             named += usize::from(right_physics);
@@ -115,7 +127,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut real = Vec::new();
     if !args.simulated_only {
         md.push_str("## Real recordings\n\n| recording | simulation | channel | physics named | parameters | held-out FIT before → after | figure |\n| --- | --- | --- | --- | --- | --- | --- |\n");
-        for (name, f) in [("silverbox", silverbox as RealCase), ("ced", ced), ("tclab", tclab), ("cascaded_tanks", tanks)] {
+        for (name, f) in
+            [("silverbox", silverbox as RealCase), ("ced", ced), ("tclab", tclab), ("cascaded_tanks", tanks)]
+        {
             eprintln!("real recording: {name}");
             match f(&args.data, &opts, &fig) {
                 Ok(r) => {
@@ -146,9 +160,17 @@ type RealCase = fn(&Path, &DiagnoseOptions, &Path) -> anyhow::Result<RealResult>
 
 /// Reads a headered CSV without a time column (the benchmark files); empty cells are NaN.
 fn read_plain(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {} (the real recordings live outside the repository)", path.display()))?;
+    let text = std::fs::read_to_string(path).with_context(|| {
+        format!("cannot read {} (the real recordings live outside the repository)", path.display())
+    })?;
     let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap_or("").split(',').map(|s| s.trim().trim_matches('"').to_string()).filter(|s| !s.is_empty()).collect();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(|s| s.trim().trim_matches('"').to_string())
+        .filter(|s| !s.is_empty())
+        .collect();
     let mut cols = vec![Vec::new(); header.len()];
     for l in lines.filter(|l| !l.trim().is_empty()) {
         for (c, cell) in l.split(',').take(header.len()).enumerate() {
@@ -159,12 +181,22 @@ fn read_plain(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
 }
 
 fn column(h: &[String], c: &[Vec<f64>], name: &str, path: &Path) -> anyhow::Result<Vec<f64>> {
-    h.iter().position(|n| n == name).map(|k| c[k].clone()).with_context(|| format!("{} has no column `{name}`", path.display()))
+    h.iter()
+        .position(|n| n == name)
+        .map(|k| c[k].clone())
+        .with_context(|| format!("{} has no column `{name}`", path.display()))
 }
 
 /// A linear ARX(na, nb) model with a constant fitted by least squares on `rows`, then simulated
 /// over the whole record (simulation mode, started at the first output).
-fn arx_simulation(u: &[f64], y: &[f64], na: usize, nb: usize, delay: usize, rows: std::ops::Range<usize>) -> Vec<f64> {
+fn arx_simulation(
+    u: &[f64],
+    y: &[f64],
+    na: usize,
+    nb: usize,
+    delay: usize,
+    rows: std::ops::Range<usize>,
+) -> Vec<f64> {
     use mpmwatch::diagnose::fit::delayed;
     let ones = vec![1.0; u.len()];
     let mut cols: Vec<Vec<f64>> = (1..=na).map(|l| delayed(y, l)).collect();
@@ -208,12 +240,25 @@ fn real_case(
         simulated: vec![Signal { name: "y", values: &s }],
     };
     let dg = mpmwatch::diagnose::diagnose(&input, opts)?;
-    crate::cmd::diagnose::output_figure(fig, &format!("real_{name}"), &format!("{name}: recorded, simulated, corrected"), &time, &y, &s, &dg.corrected[0])?;
+    crate::cmd::diagnose::output_figure(
+        fig,
+        &format!("real_{name}"),
+        &format!("{name}: recorded, simulated, corrected"),
+        &time,
+        &y,
+        &s,
+        &dg.corrected[0],
+    )?;
     let f = dg.report.findings.first();
     let (fb, fa) = (dg.report.holdout.fit_before_pct["y"], dg.report.holdout.fit_after_pct["y"]);
     let physics = f.map_or("none".to_string(), |f| f.physics.name().to_string());
     let params = f.map_or(String::new(), |f| {
-        f.parameters.iter().filter(|(k, _)| *k != "intercept").map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", ")
+        f.parameters
+            .iter()
+            .filter(|(k, _)| *k != "intercept")
+            .map(|(k, v)| format!("{k} = {v:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
     });
     let row = format!(
         "| {name} | {model} | {} | {physics} (expected: {expected}) | {params} | {fb:.1} → {fa:.1} | ![{name}](figures/real_{name}.png) |\n",
@@ -239,7 +284,17 @@ fn silverbox(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<
     let w = 30_000..40_000;
     let (u, y, s) = (u_all[w.clone()].to_vec(), y_all[w.clone()].to_vec(), s_all[w].to_vec());
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 / 610.35).collect();
-    real_case("silverbox", "linear ARX(2,3) fitted on low-amplitude samples", time, u, y, s, "cubic", opts, fig)
+    real_case(
+        "silverbox",
+        "linear ARX(2,3) fitted on low-amplitude samples",
+        time,
+        u,
+        y,
+        s,
+        "cubic",
+        opts,
+        fig,
+    )
 }
 
 /// Coupled electric drives, PRBS ±1 experiment: a linear ARX(3,3) model of the measured speed.

@@ -65,7 +65,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             sim.len()
         );
     }
-    if let Some(k) = rec.time().iter().zip(sim.time()).position(|(a, b)| (a - b).abs() > 1e-9 * (1.0 + a.abs())) {
+    if let Some(k) =
+        rec.time().iter().zip(sim.time()).position(|(a, b)| (a - b).abs() > 1e-9 * (1.0 + a.abs()))
+    {
         bail!(
             "time axes do not match at row {}: {} in {} but {} in {}",
             k + 2,
@@ -76,23 +78,37 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     if !args.excitations.is_empty() && args.excitations.len() != args.inputs.len() {
-        bail!("--excitations has {} columns but --inputs has {}: they pair by position", args.excitations.len(), args.inputs.len());
+        bail!(
+            "--excitations has {} columns but --inputs has {}: they pair by position",
+            args.excitations.len(),
+            args.inputs.len()
+        );
     }
     let col = |t: &Table, name: &str, file: &Path| -> anyhow::Result<Vec<f64>> {
         let v = t.column(name).with_context(|| format!("in {}", file.display()))?;
         if let Some(k) = v.iter().position(|x| !x.is_finite()) {
-            bail!("column `{name}` of {} has a non-finite value ({}) at line {}", file.display(), v[k], k + 2);
+            bail!(
+                "column `{name}` of {} has a non-finite value ({}) at line {}",
+                file.display(),
+                v[k],
+                k + 2
+            );
         }
         Ok(v.to_vec())
     };
-    let u: Vec<Vec<f64>> = args.inputs.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
-    let d: Vec<Vec<f64>> = args.excitations.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
-    let y: Vec<Vec<f64>> = args.outputs.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
-    let s: Vec<Vec<f64>> = args.outputs.iter().map(|n| col(&sim, n, &args.simulated)).collect::<Result<_, _>>()?;
+    let u: Vec<Vec<f64>> =
+        args.inputs.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
+    let d: Vec<Vec<f64>> =
+        args.excitations.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
+    let y: Vec<Vec<f64>> =
+        args.outputs.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
+    let s: Vec<Vec<f64>> =
+        args.outputs.iter().map(|n| col(&sim, n, &args.simulated)).collect::<Result<_, _>>()?;
     let sig = |names: &[String], v: &[Vec<f64>]| -> Vec<(String, Vec<f64>)> {
         names.iter().cloned().zip(v.iter().cloned()).collect()
     };
-    let (us, ds, ys, ss) = (sig(&args.inputs, &u), sig(&args.excitations, &d), sig(&args.outputs, &y), sig(&args.outputs, &s));
+    let (us, ds, ys, ss) =
+        (sig(&args.inputs, &u), sig(&args.excitations, &d), sig(&args.outputs, &y), sig(&args.outputs, &s));
     fn view(v: &[(String, Vec<f64>)]) -> Vec<Signal<'_>> {
         v.iter().map(|(n, x)| Signal { name: n.as_str(), values: x.as_slice() }).collect()
     }
@@ -111,7 +127,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..DiagnoseOptions::default()
     };
     let dg = diagnose(&input, &opts)?;
-    write_outputs(&dg, rec.time(), &args.outputs, &y, &s, &args.report, &args.corrected, args.figures.as_deref())?;
+    write_outputs(
+        &dg,
+        rec.time(),
+        &args.outputs,
+        &y,
+        &s,
+        &args.report,
+        &args.corrected,
+        args.figures.as_deref(),
+    )?;
     for f in &dg.report.findings {
         println!("{} → {}: {} — {}", f.input, f.output, f.physics.name(), f.summary);
     }
@@ -136,7 +161,8 @@ pub fn write_outputs(
     corrected: &Path,
     figures: Option<&Path>,
 ) -> anyhow::Result<()> {
-    std::fs::write(report, serde_json::to_string_pretty(&dg.report)?).with_context(|| format!("writing {}", report.display()))?;
+    std::fs::write(report, serde_json::to_string_pretty(&dg.report)?)
+        .with_context(|| format!("writing {}", report.display()))?;
     let mut t = Table::new(time.to_vec());
     for (n, c) in names.iter().zip(&dg.corrected) {
         t.push_column(n.clone(), c.clone())?;
@@ -145,7 +171,15 @@ pub fn write_outputs(
     t.write_csv(std::io::BufWriter::new(f))?;
     if let Some(dir) = figures {
         for (j, n) in names.iter().enumerate() {
-            output_figure(dir, &format!("diagnose_{n}"), &format!("{n}: recorded, simulated, corrected"), time, &y[j], &s[j], &dg.corrected[j])?;
+            output_figure(
+                dir,
+                &format!("diagnose_{n}"),
+                &format!("{n}: recorded, simulated, corrected"),
+                time,
+                &y[j],
+                &s[j],
+                &dg.corrected[j],
+            )?;
         }
     }
     Ok(())
@@ -153,7 +187,15 @@ pub fn write_outputs(
 
 /// A figure of recorded, simulated and corrected output (at most 300 points, the held-out tail
 /// last).
-pub fn output_figure(dir: &Path, name: &str, title: &str, time: &[f64], y: &[f64], s: &[f64], c: &[f64]) -> anyhow::Result<()> {
+pub fn output_figure(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    time: &[f64],
+    y: &[f64],
+    s: &[f64],
+    c: &[f64],
+) -> anyhow::Result<()> {
     let n = time.len();
     let step = n.div_ceil(300).max(1);
     let pts = |v: &[f64]| -> Vec<(f64, f64)> { (0..n).step_by(step).map(|k| (time[k], v[k])).collect() };

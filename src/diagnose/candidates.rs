@@ -233,12 +233,16 @@ impl OutputCtx {
                 b[*delay] = 1.0 - pole;
                 vec![filter(&b, &[*pole], u)]
             }
-            Term::DeadZone { centre, w } => vec![g0(&u.iter().map(|v| -(v - centre).clamp(-w, *w)).collect::<Vec<_>>())],
+            Term::DeadZone { centre, w } => {
+                vec![g0(&u.iter().map(|v| -(v - centre).clamp(-w, *w)).collect::<Vec<_>>())]
+            }
             Term::SaturationIn { lo, hi } => {
                 vec![g0(&u.iter().map(|v| v.clamp(*lo, *hi) - v).collect::<Vec<_>>())]
             }
             Term::SaturationOut { lo, hi } => vec![self.s.iter().map(|v| v.clamp(*lo, *hi) - v).collect()],
-            Term::Quadratic => vec![g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()), self.s_channel[i].clone()],
+            Term::Quadratic => {
+                vec![g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()), self.s_channel[i].clone()]
+            }
             Term::Cubic => vec![
                 g0(&u.iter().map(|v| v * v * v).collect::<Vec<_>>()),
                 g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()),

@@ -34,7 +34,13 @@ pub fn least_squares_rows(cols: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<
 /// picks the candidate column whose part orthogonal to the already chosen ones explains the most
 /// of `y` (the error reduction ratio, ERR), until `max_terms` are chosen or the best ERR falls
 /// below `min_err`. Returns the chosen indices with their ERR, in order of choice.
-pub fn frols(cands: &[Vec<f64>], y: &[f64], rows: &[usize], max_terms: usize, min_err: f64) -> Vec<(usize, f64)> {
+pub fn frols(
+    cands: &[Vec<f64>],
+    y: &[f64],
+    rows: &[usize],
+    max_terms: usize,
+    min_err: f64,
+) -> Vec<(usize, f64)> {
     let pick = |c: &[f64]| -> Vec<f64> { rows.iter().map(|&t| c[t]).collect() };
     let yy: Vec<f64> = pick(y);
     let sigma = dot(&yy, &yy);
@@ -106,39 +112,6 @@ pub fn delayed(x: &[f64], d: usize) -> Vec<f64> {
     (0..x.len()).map(|t| if t >= d { x[t - d] } else { x[0] }).collect()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn least_squares_recovers_exact_coefficients() {
-        let x1: Vec<f64> = (0..50).map(|t| (t as f64 * 0.37).sin()).collect();
-        let x2: Vec<f64> = (0..50).map(|t| (t as f64 * 0.11).cos()).collect();
-        let y: Vec<f64> = x1.iter().zip(&x2).map(|(a, b)| 2.0 * a - 0.5 * b).collect();
-        let th = least_squares(&[&x1, &x2], &y, 0..50).unwrap();
-        assert!((th[0] - 2.0).abs() < 1e-10 && (th[1] + 0.5).abs() < 1e-10, "{th:?}");
-    }
-
-    #[test]
-    fn frols_picks_the_true_terms_first() {
-        let c: Vec<Vec<f64>> = (0..5).map(|k| (0..200).map(|t| ((t * (k + 2)) as f64 * 0.7).sin()).collect()).collect();
-        let y: Vec<f64> = (0..200).map(|t| 3.0 * c[3][t] + 0.5 * c[1][t]).collect();
-        let rows: Vec<usize> = (0..200).collect();
-        let chosen = frols(&c, &y, &rows, 4, 1e-6);
-        assert_eq!(chosen[0].0, 3);
-        assert_eq!(chosen[1].0, 1);
-        assert_eq!(chosen.len(), 2);
-    }
-
-    #[test]
-    fn first_order_filter_step_response() {
-        let mut x = vec![1.0; 30];
-        x[0] = 0.0;
-        let y = filter(&[0.0, 0.5], &[0.5], &x);
-        assert!((y[29] - 1.0).abs() < 1e-6 && y[0] == 0.0);
-    }
-}
-
 /// Instrumental-variable estimate: solves `Zᵀ X θ = Zᵀ y` over `rows`, with one instrument column
 /// per regressor. In a closed loop the regressors (built from the recorded inputs) carry the
 /// disturbance back through feedback and least squares is biased; instruments built from the
@@ -163,4 +136,38 @@ pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: &[usize])
     let theta = svd.solve(&zy, smax * 1e-9).ok()?;
     let out: Vec<f64> = theta.iter().copied().collect();
     out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn least_squares_recovers_exact_coefficients() {
+        let x1: Vec<f64> = (0..50).map(|t| (t as f64 * 0.37).sin()).collect();
+        let x2: Vec<f64> = (0..50).map(|t| (t as f64 * 0.11).cos()).collect();
+        let y: Vec<f64> = x1.iter().zip(&x2).map(|(a, b)| 2.0 * a - 0.5 * b).collect();
+        let th = least_squares(&[&x1, &x2], &y, 0..50).unwrap();
+        assert!((th[0] - 2.0).abs() < 1e-10 && (th[1] + 0.5).abs() < 1e-10, "{th:?}");
+    }
+
+    #[test]
+    fn frols_picks_the_true_terms_first() {
+        let c: Vec<Vec<f64>> =
+            (0..5).map(|k| (0..200).map(|t| ((t * (k + 2)) as f64 * 0.7).sin()).collect()).collect();
+        let y: Vec<f64> = (0..200).map(|t| 3.0 * c[3][t] + 0.5 * c[1][t]).collect();
+        let rows: Vec<usize> = (0..200).collect();
+        let chosen = frols(&c, &y, &rows, 4, 1e-6);
+        assert_eq!(chosen[0].0, 3);
+        assert_eq!(chosen[1].0, 1);
+        assert_eq!(chosen.len(), 2);
+    }
+
+    #[test]
+    fn first_order_filter_step_response() {
+        let mut x = vec![1.0; 30];
+        x[0] = 0.0;
+        let y = filter(&[0.0, 0.5], &[0.5], &x);
+        assert!((y[29] - 1.0).abs() < 1e-6 && y[0] == 0.0);
+    }
 }

@@ -127,7 +127,11 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     if input.simulated.len() != input.outputs.len() {
         return Err(DiagnoseError::invalid(
             "simulation",
-            format!("{} simulated outputs for {} recorded outputs", input.simulated.len(), input.outputs.len()),
+            format!(
+                "{} simulated outputs for {} recorded outputs",
+                input.simulated.len(),
+                input.outputs.len()
+            ),
         ));
     }
     let exc = input.excitations.clone().unwrap_or_else(|| input.inputs.clone());
@@ -141,16 +145,23 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         check(input.time, s)?;
     }
     if !(0.05..=0.8).contains(&opts.holdout_fraction) {
-        return Err(DiagnoseError::invalid("holdout fraction", format!("{} is not in [0.05, 0.8]", opts.holdout_fraction)));
+        return Err(DiagnoseError::invalid(
+            "holdout fraction",
+            format!("{} is not in [0.05, 0.8]", opts.holdout_fraction),
+        ));
     }
     let n_train = ((1.0 - opts.holdout_fraction) * n as f64).round() as usize;
     if n_train < 200 + opts.warmup {
-        return Err(DiagnoseError::invalid("record", format!("{n} samples leave {n_train} for training; at least {} are needed", 200 + opts.warmup)));
+        return Err(DiagnoseError::invalid(
+            "record",
+            format!("{n} samples leave {n_train} for training; at least {} are needed", 200 + opts.warmup),
+        ));
     }
     let ts = sample_time(input.time)?;
     let w0 = opts.warmup;
     let n_fit = w0 + (0.7 * (n_train - w0) as f64) as usize;
-    let features = input.excitations.as_ref().map(|e| dither_features(&e.iter().map(|s| s.values).collect::<Vec<_>>()));
+    let features =
+        input.excitations.as_ref().map(|e| dither_features(&e.iter().map(|s| s.values).collect::<Vec<_>>()));
     // Three contiguous folds of the training part: each block validates a fit on the other two.
     let edges: Vec<usize> = (0..=3).map(|k| w0 + k * (n_train - w0) / 3).collect();
     let folds = (0..3)
@@ -161,8 +172,12 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         .collect();
     let split = Split { features, fit: w0..n_fit, validate: n_fit..n_train, train: w0..n_train, folds };
 
-    let residuals: Vec<Vec<f64>> =
-        input.outputs.iter().zip(&input.simulated).map(|(y, s)| y.values.iter().zip(s.values).map(|(a, b)| a - b).collect()).collect();
+    let residuals: Vec<Vec<f64>> = input
+        .outputs
+        .iter()
+        .zip(&input.simulated)
+        .map(|(y, s)| y.values.iter().zip(s.values).map(|(a, b)| a - b).collect())
+        .collect();
     // Outputs whose residual is constant on the training part (a perfect simulation) cannot be
     // tested and need no correction.
     let testable: Vec<usize> = (0..residuals.len())
@@ -171,11 +186,19 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let matrix = if testable.is_empty() {
         None
     } else {
-        let d: Vec<Signal<'_>> = exc.iter().map(|e| Signal { name: e.name, values: &e.values[..n_train] }).collect();
-        let r: Vec<Signal<'_>> = testable.iter().map(|&j| Signal { name: input.outputs[j].name, values: &residuals[j][..n_train] }).collect();
+        let d: Vec<Signal<'_>> =
+            exc.iter().map(|e| Signal { name: e.name, values: &e.values[..n_train] }).collect();
+        let r: Vec<Signal<'_>> = testable
+            .iter()
+            .map(|&j| Signal { name: input.outputs[j].name, values: &residuals[j][..n_train] })
+            .collect();
         let mo = MatrixOptions {
             lags: LagChoice::Fixed(opts.lags),
-            surrogates: SurrogateOptions { count: opts.surrogates, seed: opts.seed, ..SurrogateOptions::default() },
+            surrogates: SurrogateOptions {
+                count: opts.surrogates,
+                seed: opts.seed,
+                ..SurrogateOptions::default()
+            },
             ..MatrixOptions::default()
         };
         Some(crate::detect::analyze(&d, &r, &mo)?)
@@ -202,19 +225,23 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 let jt = c.joint.as_ref().map(|j| (j.norm, j.threshold.critical)).unwrap_or_default();
                 if c.significant { jt } else { (c.pairwise.norm, c.pairwise.threshold.critical) }
             };
-            let verdict = m.channels.iter().find(|ch| ch.mv_index == c.mv && ch.cv_index == c.cv).map(|ch| ch.verdict);
+            let verdict =
+                m.channels.iter().find(|ch| ch.mv_index == c.mv && ch.cv_index == c.cv).map(|ch| ch.verdict);
             channels.push(ChannelReport {
                 input: input.inputs[c.mv].name.to_string(),
                 output: input.outputs[j].name.to_string(),
                 norm_mi_bits: norm / bits,
                 threshold_bits: thr / bits,
                 significant: c.significant,
-                verdict: verdict.map(|v| serde_json::to_value(v).ok().and_then(|v| v.as_str().map(str::to_string))).flatten().unwrap_or_default(),
+                verdict: verdict
+                    .and_then(|v| serde_json::to_value(v).ok().and_then(|v| v.as_str().map(str::to_string)))
+                    .unwrap_or_default(),
                 ccf_significant: c.ccf.significant,
             });
         }
         for (cv, &j) in testable.iter().enumerate() {
-            let flagged: Vec<usize> = m.cells.iter().filter(|c| c.cv == cv && c.significant).map(|c| c.mv).collect();
+            let flagged: Vec<usize> =
+                m.cells.iter().filter(|c| c.cv == cv && c.significant).map(|c| c.mv).collect();
             if flagged.is_empty() {
                 continue;
             }
@@ -236,7 +263,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut before = BTreeMap::new();
     let mut after = BTreeMap::new();
     for (j, y) in input.outputs.iter().enumerate() {
-        before.insert(y.name.to_string(), fit_pct(&y.values[n_train..], &input.simulated[j].values[n_train..]));
+        before
+            .insert(y.name.to_string(), fit_pct(&y.values[n_train..], &input.simulated[j].values[n_train..]));
         after.insert(y.name.to_string(), fit_pct(&y.values[n_train..], &corrected[j][n_train..]));
     }
     let report = DiagnosisReport {
@@ -259,7 +287,10 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
 /// The median spacing of the time axis; it must increase strictly.
 fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {
     if let Some(k) = time.windows(2).position(|w| w[1] <= w[0]) {
-        return Err(DiagnoseError::invalid("time axis", format!("time does not increase at row {} ({} then {})", k + 1, time[k], time[k + 1])));
+        return Err(DiagnoseError::invalid(
+            "time axis",
+            format!("time does not increase at row {} ({} then {})", k + 1, time[k], time[k + 1]),
+        ));
     }
     let mut d: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     d.sort_by(f64::total_cmp);
@@ -273,7 +304,16 @@ pub fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCt
     let ut: Vec<Vec<f64>> = u.iter().zip(&u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
     let has_channel: Vec<bool> = (0..u.len()).map(|i| model.has_channel(i, u[i], s)).collect();
     let s_channel: Vec<Vec<f64>> = (0..u.len()).map(|i| model.channel(i, &ut[i])).collect();
-    OutputCtx { y0: nominal::median(&s[split.train.clone()]), ut, u0, y: y.to_vec(), s: s.to_vec(), model, has_channel, s_channel }
+    OutputCtx {
+        y0: nominal::median(&s[split.train.clone()]),
+        ut,
+        u0,
+        y: y.to_vec(),
+        s: s.to_vec(),
+        model,
+        has_channel,
+        s_channel,
+    }
 }
 
 /// The dither-driven part of an input: its least-squares projection on the excitations at lags
@@ -320,7 +360,8 @@ pub fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
 /// The instrument context: `ctx` with the dither-driven inputs in place of the recorded ones,
 /// and the model's response to them in place of the simulated and recorded outputs.
 pub fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
-    let ut: Vec<Vec<f64>> = u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
+    let ut: Vec<Vec<f64>> =
+        u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
     let s_channel: Vec<Vec<f64>> = (0..ut.len()).map(|i| ctx.model.channel(i, &ut[i])).collect();
     let mut s = vec![ctx.y0; ctx.s.len()];
     for c in &s_channel {
@@ -366,11 +407,14 @@ fn decide(
     // Open loop: the winner must also raise the plain validation FIT. Closed loop: the plain FIT
     // can fall for the true correction (the nominal error partly cancels the disturbance through
     // feedback), so the dither-projected score alone decides.
-    let best = best.filter(|s| split.features.is_some() || val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
+    let best = best
+        .filter(|s| split.features.is_some() || val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
     let out_name = input.outputs[j].name;
     if let Some(f) = best.and_then(|b| b.fitted.clone()) {
         // Refit the chosen hypothesis (its grid values fixed) on the whole training part.
-        let refit = select::fit_term(ctx, inst, r, f.input, f.term.clone(), &split.train.clone().collect::<Vec<_>>()).unwrap_or(f);
+        let refit =
+            select::fit_term(ctx, inst, r, f.input, f.term.clone(), &split.train.clone().collect::<Vec<_>>())
+                .unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);

@@ -105,19 +105,27 @@ pub fn identify(u: &[&[f64]], s: &[f64], rows: std::ops::Range<usize>) -> Nomina
             if !stable(&a) {
                 continue;
             }
-            let b: Vec<Vec<f64>> = (0..u.len()).map(|i| th[na + i * nb..na + (i + 1) * nb].to_vec()).collect();
+            let b: Vec<Vec<f64>> =
+                (0..u.len()).map(|i| th[na + i * nb..na + (i + 1) * nb].to_vec()).collect();
             let m = NominalArx { a, b, c: th[th.len() - 1], fit_pct: 0.0 };
             let sim = m.simulate(u);
             let err: f64 = rows.clone().map(|t| (s[t] - sim[t]).powi(2)).sum::<f64>() / rows.len() as f64;
             let p = (na + nb * u.len() + 1) as f64;
             // Relative error floored at 1e-12: an exact fit stops the search for higher orders.
-            let score = rows.len() as f64 * (err / (scale * scale)).max(1e-12).ln() + p * (rows.len() as f64).ln();
+            let score =
+                rows.len() as f64 * (err / (scale * scale)).max(1e-12).ln() + p * (rows.len() as f64).ln();
             if best.as_ref().is_none_or(|b| score < b.0) {
-                best = Some((score, NominalArx { fit_pct: fit_pct(&s[rows.clone()], &sim[rows.clone()]), ..m }));
+                best =
+                    Some((score, NominalArx { fit_pct: fit_pct(&s[rows.clone()], &sim[rows.clone()]), ..m }));
             }
         }
     }
-    best.map(|b| b.1).unwrap_or(NominalArx { a: vec![], b: vec![vec![0.0]; u.len()], c: 0.0, fit_pct: f64::NAN })
+    best.map(|b| b.1).unwrap_or(NominalArx {
+        a: vec![],
+        b: vec![vec![0.0]; u.len()],
+        c: 0.0,
+        fit_pct: f64::NAN,
+    })
 }
 
 /// Stable when the impulse response of `1/A` decays (checked over a long horizon; cheap and

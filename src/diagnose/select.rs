@@ -153,7 +153,14 @@ pub fn score(
 /// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
 ///
 /// Each is scored by 3-fold cross-validation within the training part (see [`score`]).
-pub fn rank(ctx: &OutputCtx, inst: &OutputCtx, r: &[f64], inputs: &[usize], split: &Split, penalty: f64) -> Vec<Scored> {
+pub fn rank(
+    ctx: &OutputCtx,
+    inst: &OutputCtx,
+    r: &[f64],
+    inputs: &[usize],
+    split: &Split,
+    penalty: f64,
+) -> Vec<Scored> {
     // Each hypothesis: fitted and scored on every fold; its score is the sum over folds.
     let fold_score = |f: Option<&FittedTerm>| -> Option<(f64, f64, usize)> {
         let mut total = (0.0, 0.0, 0);

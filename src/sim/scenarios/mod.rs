@@ -179,7 +179,11 @@ fn abs_sp(t: f64) -> f64 {
 /// that record.
 pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
     if !(1..=3).contains(&spec.size) || spec.channel.0 >= spec.size || spec.channel.1 >= spec.size {
-        return Err(SimError::parameter("scenario size/channel", spec.size, "size 1..=3 with the channel inside it"));
+        return Err(SimError::parameter(
+            "scenario size/channel",
+            spec.size,
+            "size 1..=3 with the channel inside it",
+        ));
     }
     if spec.effect == Effect::MissingCoupling && spec.channel.0 == spec.channel.1 {
         return Err(SimError::parameter("missing coupling channel", spec.channel.0, "must be off-diagonal"));
@@ -187,14 +191,21 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let d = spec.excitation.generate_many(spec.n, spec.size, DITHER_STD, &mut rng)?;
     let slow = spec.effect == Effect::DisturbanceOnly;
-    let e: Vec<Vec<f64>> = (0..spec.size).map(|_| white_gaussian(spec.n + 200, 1.0, &mut rng)).collect::<Result<_, _>>()?;
+    let e: Vec<Vec<f64>> =
+        (0..spec.size).map(|_| white_gaussian(spec.n + 200, 1.0, &mut rng)).collect::<Result<_, _>>()?;
     let (pole, std): (f64, f64) = if slow { (0.97, 0.6) } else { (0.9, 0.3) };
     let v: Vec<Vec<f64>> = e
         .iter()
         .map(|e| {
             let mut x = 0.0;
             let g = std * (1.0 - pole * pole).sqrt();
-            e.iter().map(|w| { x = pole * x + g * w; x }).skip(200).collect()
+            e.iter()
+                .map(|w| {
+                    x = pole * x + g * w;
+                    x
+                })
+                .skip(200)
+                .collect()
         })
         .collect();
     if !spec.effect.is_mismatch() {
@@ -204,7 +215,9 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
         let mut best: Option<ScenarioRecord> = None;
         for extra in 1..=6 {
             let r = simulate(spec, extra as f64, &d, &v);
-            if best.as_ref().is_none_or(|b| (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs()) {
+            if best.as_ref().is_none_or(|b| {
+                (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs()
+            }) {
                 best = Some(r);
             }
         }
@@ -220,7 +233,9 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
     let mut best: Option<ScenarioRecord> = None;
     let mut keep = |r: ScenarioRecord| {
         if r.effect_ratio.is_finite()
-            && best.as_ref().is_none_or(|b| (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs())
+            && best.as_ref().is_none_or(|b| {
+                (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs()
+            })
         {
             best = Some(r);
         }
@@ -228,7 +243,8 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
     for _ in 0..30 {
         let mid = 0.5 * (lo + hi);
         let r = simulate(spec, mid, &d, &v);
-        let (ratio, done) = (r.effect_ratio, (r.effect_ratio - spec.target_ratio).abs() < 0.01 * spec.target_ratio);
+        let (ratio, done) =
+            (r.effect_ratio, (r.effect_ratio - spec.target_ratio).abs() < 0.01 * spec.target_ratio);
         keep(r);
         if done {
             break;
@@ -243,6 +259,7 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
 }
 
 /// One closed-loop run at strength `t`.
+#[allow(clippy::needless_range_loop)]
 fn simulate(spec: &ScenarioSpec, t: f64, d: &[Vec<f64>], v: &[Vec<f64>]) -> ScenarioRecord {
     let (m, n) = (spec.size, spec.n);
     let (ci, cj) = spec.channel;
@@ -268,7 +285,8 @@ fn simulate(spec: &ScenarioSpec, t: f64, d: &[Vec<f64>], v: &[Vec<f64>]) -> Scen
         }
         _ => {}
     }
-    let sp: Vec<f64> = (0..m).map(|j| if eff == Effect::AbsSensor && j == cj { abs_sp(t) } else { 0.0 }).collect();
+    let sp: Vec<f64> =
+        (0..m).map(|j| if eff == Effect::AbsSensor && j == cj { abs_sp(t) } else { 0.0 }).collect();
     let mut u = vec![vec![0.0; n]; m];
     let mut uc = vec![0.0; m];
     let mut e_prev = vec![0.0; m];
@@ -361,7 +379,8 @@ fn var(x: &[f64]) -> f64 {
 /// dithers; target ratios spread over 0.15–0.6. `n` samples each, seeds from `seed`.
 pub fn casebook_specs(n: usize, seed: u64) -> Vec<ScenarioSpec> {
     use Effect::*;
-    let list: [(Effect, usize, (usize, usize), Excitation, f64); 28] = [
+    type Row = (Effect, usize, (usize, usize), Excitation, f64);
+    let list: [Row; 28] = [
         (Gain, 1, (0, 0), Excitation::Prbs, 0.3),
         (Gain, 2, (1, 1), Excitation::Uniform, 0.5),
         (TimeConstant, 1, (0, 0), Excitation::Uniform, 0.4),
@@ -394,7 +413,16 @@ pub fn casebook_specs(n: usize, seed: u64) -> Vec<ScenarioSpec> {
     list.iter()
         .enumerate()
         .map(|(k, &(effect, size, channel, excitation, target_ratio))| ScenarioSpec {
-            name: format!("c{:02}_{}_{}x{}", k + 1, serde_json::to_value(effect).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default(), size, size),
+            name: format!(
+                "c{:02}_{}_{}x{}",
+                k + 1,
+                serde_json::to_value(effect)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default(),
+                size,
+                size
+            ),
             effect,
             size,
             channel,
