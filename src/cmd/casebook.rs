@@ -350,11 +350,21 @@ fn tclab(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
 fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     let p = data.join("cascaded_tanks/dataBenchmark.csv");
     let (h, c) = read_plain(&p)?;
-    let (u, y) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
-    let s = mpmwatch::diagnose::tanks::calibrate_and_simulate(&u, &y, 4.0);
+    let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
+    let (uv, yv) = (column(&h, &c, "uVal", &p)?, column(&h, &c, "yVal", &p)?);
+    // Calibrated on the estimation record, then both records simulated (each from its own
+    // start) and diagnosed as one 2048-sample record: the validation record is the held-out tail.
+    let model = mpmwatch::diagnose::tanks::calibrate(&ue, &ye, 4.0);
+    let s: Vec<f64> = model.simulate(&ue, 4.0).into_iter().chain(model.simulate(&uv, 4.0)).collect();
+    let u: Vec<f64> = ue.iter().chain(&uv).copied().collect();
+    let y: Vec<f64> = ye.iter().chain(&yv).copied().collect();
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();
     // The tanks answer over tens of samples (time constants of minutes at Ts = 4 s): the MI
     // profile needs lags to 40 to see the input's effect at all.
-    let opts = DiagnoseOptions { lags: mpmwatch::info::Lags { min: 1, max: 40 }, ..opts.clone() };
+    let opts = DiagnoseOptions {
+        lags: mpmwatch::info::Lags { min: 1, max: 40 },
+        holdout_fraction: 0.45,
+        ..opts.clone()
+    };
     real_case("cascaded_tanks", "Torricelli two tanks, no overflow", time, u, y, s, "saturation", &opts, fig)
 }

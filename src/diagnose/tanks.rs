@@ -43,6 +43,11 @@ impl TwoTanks {
 /// and the sensor clip) by a log-space coordinate search on the squared simulation error, and
 /// returns the simulation over the whole record.
 pub fn calibrate_and_simulate(u: &[f64], y: &[f64], ts: f64) -> Vec<f64> {
+    calibrate(u, y, ts).simulate(u, ts)
+}
+
+/// The calibration of [`calibrate_and_simulate`].
+pub fn calibrate(u: &[f64], y: &[f64], ts: f64) -> TwoTanks {
     let ymax = y.iter().fold(f64::MIN, |a, &b| a.max(b));
     let mask: Vec<bool> = y.iter().map(|&v| v < 0.8 * ymax).collect();
     let cost = |p: &TwoTanks| -> f64 {
@@ -80,5 +85,5 @@ pub fn calibrate_and_simulate(u: &[f64], y: &[f64], ts: f64) -> Vec<f64> {
             }
         }
     }
-    p.simulate(u, ts)
+    p
 }
