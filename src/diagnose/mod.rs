@@ -248,7 +248,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             let ctx = output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split);
             let inst = instrument_ctx(&ctx, &u_driven);
             let r = &residuals[j];
-            let ranked = select::rank(&ctx, &inst, r, &flagged, &split, opts.penalty);
+            let scoring = scoring_ctxs(&ctx, &u_all, &u_driven);
+            let ranked = select::rank(&ctx, &inst, &scoring, r, &flagged, &split, opts.penalty);
             let (finding, corr) = decide(&ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
             if let Some(c) = corr {
                 corrected[j].iter_mut().zip(&c).for_each(|(a, b)| *a += b);
@@ -355,6 +356,23 @@ pub fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
         z.extend(lags);
     }
     z
+}
+
+/// The closed-loop scoring contexts: inputs = dither-driven part + the disturbance-driven part
+/// (`u − u_d`) circularly shifted by 1/5, 2/5, 3/5 and 4/5 of the record.
+pub fn scoring_ctxs(ctx: &OutputCtx, u: &[&[f64]], u_driven: &[Vec<f64>]) -> Vec<OutputCtx> {
+    let n = u.first().map_or(0, |x| x.len());
+    (1..=4)
+        .map(|k| {
+            let shift = k * n / 5;
+            let uk: Vec<Vec<f64>> = u
+                .iter()
+                .zip(u_driven)
+                .map(|(x, d)| (0..n).map(|t| d[t] + (x[(t + shift) % n] - d[(t + shift) % n])).collect())
+                .collect();
+            instrument_ctx(ctx, &uk)
+        })
+        .collect()
 }
 
 /// The instrument context: `ctx` with the dither-driven inputs in place of the recorded ones,

@@ -113,7 +113,7 @@ fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
 #[allow(clippy::too_many_arguments)]
 pub fn score(
     ctx: &OutputCtx,
-    inst: Option<&OutputCtx>,
+    inst: Option<&[OutputCtx]>,
     r: &[f64],
     f: Option<FittedTerm>,
     fit_rows: &[usize],
@@ -124,11 +124,16 @@ pub fn score(
         Some(f) => {
             let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
             let c = match inst {
-                Some(i) => {
-                    // Re-centre the intercept for the dither-driven evaluation on the fit rows.
+                Some(set) => {
+                    // Averaged over the scoring contexts (see `rank`), intercept re-centred on
+                    // the fit rows.
                     let mut g = f.clone();
                     g.intercept = 0.0;
-                    let c0 = correction(i, &g)?;
+                    let mut c0 = vec![0.0; r.len()];
+                    for i in set {
+                        let ci = correction(i, &g)?;
+                        c0.iter_mut().zip(&ci).for_each(|(a, b)| *a += b / set.len() as f64);
+                    }
                     g.intercept = fit_rows.iter().map(|&t| r[t] - c0[t]).sum::<f64>() / fit_rows.len() as f64;
                     c0.iter().map(|v| v + g.intercept).collect()
                 }
@@ -153,9 +158,16 @@ pub fn score(
 /// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
 ///
 /// Each is scored by 3-fold cross-validation within the training part (see [`score`]).
+///
+/// Closed loop: a correction is scored as the average of its evaluations on `scoring`, contexts
+/// whose inputs are the dither-driven part plus a circularly shifted copy of the disturbance-driven
+/// part. The shift breaks the link to the disturbance now in the residual (so no hypothesis can
+/// win by cancelling it), while the inputs keep their full spread, so a nonlinearity is judged at
+/// the amplitudes the plant saw (the average estimates `E[c(u) | dither]`).
 pub fn rank(
     ctx: &OutputCtx,
     inst: &OutputCtx,
+    scoring: &[OutputCtx],
     r: &[f64],
     inputs: &[usize],
     split: &Split,
@@ -169,7 +181,7 @@ pub fn rank(
                 Some(f) => Some(fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?),
                 None => None,
             };
-            let closed = split.features.is_some().then_some(inst);
+            let closed = split.features.is_some().then_some(scoring);
             let s = score(ctx, closed, r, fitted, fit_rows, val.clone(), penalty)?;
             total = (total.0 + s.score, total.1 + s.sse, s.complexity);
         }
