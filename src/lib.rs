@@ -17,6 +17,7 @@
 
 pub mod benchmark;
 pub mod detect;
+pub mod diagnose;
 pub mod info;
 pub mod io;
 pub mod model;

@@ -2,7 +2,9 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod casebook;
 pub mod demo;
+pub mod diagnose;
 pub mod mi;
 pub mod reproduce;
 pub mod serve;

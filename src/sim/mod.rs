@@ -12,6 +12,7 @@ mod nmpc;
 mod noise;
 mod pi;
 mod qp;
+pub mod scenarios;
 
 pub use closed_loop::{ClosedLoop, Controller, LoopRecord};
 pub use dither::{Excitation, Lfsr, MultilevelPrbs, PRBS_MAX_ORDER, PRBS_MIN_ORDER, Prbs};

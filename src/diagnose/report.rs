@@ -1,0 +1,108 @@
+//! The diagnosis report of DESIGN.md §4.5, as serde structs.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::candidates::{ActsOn, Physics};
+
+/// The whole report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosisReport {
+    /// True when the MI matrix finds any significant element.
+    pub mismatch: bool,
+    /// One entry per tested input→output channel.
+    pub channels: Vec<ChannelReport>,
+    /// What physics was left out, per output with a flagged channel.
+    pub findings: Vec<Finding>,
+    /// FIT% on the held-out tail, before and after the correction.
+    pub holdout: Holdout,
+    /// How the diagnosis was made (seed, surrogates, split, penalty): for reproduction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settings: Option<Settings>,
+}
+
+/// One MV→CV channel of the MI matrix.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelReport {
+    /// Input name.
+    pub input: String,
+    /// Output name.
+    pub output: String,
+    /// Norm of MI (eq 19), bits (the joint-lag norm when only that one is significant).
+    pub norm_mi_bits: f64,
+    /// Its critical value, bits.
+    pub threshold_bits: f64,
+    /// Above the critical value (norm or any lag, pairwise or joint).
+    pub significant: bool,
+    /// `mismatch`, `clean` or `implicated_by_feedback`.
+    pub verdict: String,
+    /// Whether the linear cross-correlation baseline also sees this channel.
+    #[serde(default)]
+    pub ccf_significant: bool,
+}
+
+/// One named piece of left-out physics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    /// Input name.
+    pub input: String,
+    /// Output name.
+    pub output: String,
+    /// The vocabulary class.
+    pub physics: Physics,
+    /// Where it acts.
+    pub acts_on: ActsOn,
+    /// One sentence for a person.
+    pub summary: String,
+    /// Parameters in engineering units (names say the unit: `_s` seconds; others in the units
+    /// of the input or output they refer to).
+    pub parameters: BTreeMap<String, f64>,
+    /// FIT% of the nominal simulation over the whole record.
+    pub fit_before_pct: f64,
+    /// FIT% of the corrected simulation over the whole record.
+    pub fit_after_pct: f64,
+    /// The classes tried and their validation scores relative to the null hypothesis (lower is
+    /// better), best first; for `unexplained`, the evidence that nothing fitted.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tried: Vec<Tried>,
+}
+
+/// One class tried on a channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Tried {
+    /// The class.
+    pub physics: Physics,
+    /// Its best penalised score minus the null hypothesis' (negative: better than no correction).
+    pub score_vs_null: f64,
+    /// Validation FIT% gain of the residual model over no correction, points.
+    pub validation_gain_pct: f64,
+}
+
+/// Held-out comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Holdout {
+    /// First row of the held-out tail.
+    pub start_index: usize,
+    /// FIT% of the nominal simulation per output.
+    pub fit_before_pct: BTreeMap<String, f64>,
+    /// FIT% of the corrected simulation per output.
+    pub fit_after_pct: BTreeMap<String, f64>,
+}
+
+/// The settings a report was made with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    /// Fraction of the record held out.
+    pub holdout_fraction: f64,
+    /// Surrogates per MI element.
+    pub surrogates: usize,
+    /// Seed of the surrogates.
+    pub seed: u64,
+    /// Lags of the MI profile.
+    pub lags: [usize; 2],
+    /// Penalty multiplier (1 = BIC).
+    pub penalty: f64,
+    /// Sample time, seconds.
+    pub sample_time_s: f64,
+}

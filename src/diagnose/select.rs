@@ -1,0 +1,210 @@
+//! Choosing between hypotheses. Every concrete term is fitted by least squares on the first
+//! part of the training data and scored on the rest of the training data (never on the held-out
+//! tail) in simulation mode, with a BIC-style penalty per coefficient and per grid value. The
+//! intercept-only correction is the null hypothesis every term must beat.
+
+use super::candidates::{OutputCtx, Term, grid};
+use super::fit::{frols, instrumental};
+use super::simulate::{FittedTerm, correction};
+
+/// One scored hypothesis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scored {
+    /// The fitted term (`None`: the null hypothesis).
+    pub fitted: Option<FittedTerm>,
+    /// Validation sum of squared errors.
+    pub sse: f64,
+    /// Complexity: coefficients plus grid values.
+    pub complexity: usize,
+    /// Penalised score (lower is better).
+    pub score: f64,
+}
+
+/// Splits of the record.
+#[derive(Debug, Clone)]
+pub struct Split {
+    /// Dither features (`None`: open loop). In a closed loop hypotheses are scored on the
+    /// dither-driven inputs.
+    pub features: Option<Vec<Vec<f64>>>,
+    /// Rows used to fit during selection (the first 70 % of the training part; grids and
+    /// feature sets are built on them).
+    pub fit: std::ops::Range<usize>,
+    /// Rows used to score during selection (the end of the training part).
+    pub validate: std::ops::Range<usize>,
+    /// Cross-validation folds within the training part: (fit rows, validation block).
+    pub folds: Vec<(Vec<usize>, std::ops::Range<usize>)>,
+    /// The whole training part (the final refit).
+    pub train: std::ops::Range<usize>,
+}
+
+/// Fits one term's coefficients on `rows` against the residual `r`.
+/// The columns of the term are instrumented by the same columns built on `inst`, the context
+/// with the dither-driven part of the inputs in place of the recorded inputs.
+pub fn fit_term(
+    ctx: &OutputCtx,
+    inst: &OutputCtx,
+    r: &[f64],
+    input: usize,
+    term: Term,
+    rows: &[usize],
+) -> Option<FittedTerm> {
+    let term = match term {
+        Term::Bilinear(ref pool) if pool.is_empty() => {
+            // FROLS chooses up to two products from the pool on these rows.
+            let pool = ctx.bilinear_pool(input);
+            let cols = inst.columns(input, &Term::Bilinear(pool.clone()));
+            let rc: Vec<f64> = centre_on(r, rows);
+            let cc: Vec<Vec<f64>> = cols.iter().map(|c| centre_on(c, rows)).collect();
+            let chosen = frols(&cc, &rc, rows, 2, 0.01);
+            if chosen.is_empty() {
+                return None;
+            }
+            Term::Bilinear(chosen.iter().map(|&(k, _)| pool[k]).collect())
+        }
+        t => t,
+    };
+    let cols = ctx.columns(input, &term);
+    if term.fixed_weight() {
+        let col = cols.first()?;
+        let intercept = rows.iter().map(|&t| r[t] - col[t]).sum::<f64>() / rows.len().max(1) as f64;
+        return intercept.is_finite().then_some(FittedTerm { input, term, intercept, coefs: vec![1.0] });
+    }
+    let ones = vec![1.0; r.len()];
+    let mut refs: Vec<&[f64]> = vec![&ones];
+    refs.extend(cols.iter().map(|c| c.as_slice()));
+    let zcols = inst.columns(input, &term);
+    let mut zrefs: Vec<&[f64]> = vec![&ones];
+    zrefs.extend(zcols.iter().map(|c| c.as_slice()));
+    let th = instrumental(&refs, &zrefs, r, rows)?;
+    let mut f = FittedTerm { input, term, intercept: th[0], coefs: th[1..].to_vec() };
+    if f.term.is_recursive() {
+        // The linearised coefficient used the recorded output; refine its scale in simulation
+        // mode on the same rows (a one-dimensional grid), re-centring the intercept each time.
+        let base = f.coefs[0];
+        let mut best: Option<(f64, FittedTerm)> = None;
+        for m in [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0] {
+            let mut g = FittedTerm { intercept: 0.0, coefs: vec![base * m], ..f.clone() };
+            let Some(c) = correction(ctx, &g) else { continue };
+            g.intercept = rows.iter().map(|&t| r[t] - c[t]).sum::<f64>() / rows.len() as f64;
+            let sse: f64 = rows.iter().map(|&t| (r[t] - c[t] - g.intercept).powi(2)).sum();
+            if best.as_ref().is_none_or(|b| sse < b.0) {
+                best = Some((sse, g));
+            }
+        }
+        f = best?.1;
+    }
+    Some(f)
+}
+
+fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
+    let m = rows.iter().map(|&t| x[t]).sum::<f64>() / rows.len().max(1) as f64;
+    x.iter().map(|v| v - m).collect()
+}
+
+/// Scores a fitted term on the validation rows: `n·ln(SSE/n) + penalty·k·ln(n)`.
+///
+/// Open loop (`inst` is `None`): SSE of the residual minus the correction. Closed loop: the
+/// correction is evaluated on the dither-driven inputs (`inst`) instead of the recorded ones.
+/// The recorded inputs carry the disturbance back through feedback, so a correction of the
+/// recorded inputs can lower the error by cancelling disturbance rather than by explaining the
+/// plant (a gain change imitating a dead zone, say). A correction of the dither-driven inputs is
+/// independent of the disturbance, so the disturbance adds the same amount to every hypothesis'
+/// error and the comparison is fair.
+#[allow(clippy::too_many_arguments)]
+pub fn score(
+    ctx: &OutputCtx,
+    inst: Option<&[OutputCtx]>,
+    r: &[f64],
+    f: Option<FittedTerm>,
+    fit_rows: &[usize],
+    validate: std::ops::Range<usize>,
+    penalty: f64,
+) -> Option<Scored> {
+    let (c, complexity) = match &f {
+        Some(f) => {
+            let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
+            let c = match inst {
+                Some(set) => {
+                    // Averaged over the scoring contexts (see `rank`), intercept re-centred on
+                    // the fit rows.
+                    let mut g = f.clone();
+                    g.intercept = 0.0;
+                    let mut c0 = vec![0.0; r.len()];
+                    for i in set {
+                        let ci = correction(i, &g)?;
+                        c0.iter_mut().zip(&ci).for_each(|(a, b)| *a += b / set.len() as f64);
+                    }
+                    g.intercept = fit_rows.iter().map(|&t| r[t] - c0[t]).sum::<f64>() / fit_rows.len() as f64;
+                    c0.iter().map(|v| v + g.intercept).collect()
+                }
+                None => correction(ctx, f)?,
+            };
+            (c, 1 + free + f.term.grid_params())
+        }
+        None => {
+            let m = fit_rows.iter().map(|&t| r[t]).sum::<f64>() / fit_rows.len() as f64;
+            (vec![m; r.len()], 1)
+        }
+    };
+    let n = validate.len() as f64;
+    let sse: f64 = validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum();
+    if !sse.is_finite() {
+        return None;
+    }
+    let score = n * (sse / n).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
+    Some(Scored { fitted: f, sse, complexity, score })
+}
+
+/// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
+///
+/// Each is scored by 3-fold cross-validation within the training part (see [`score`]).
+///
+/// Closed loop: a correction is scored as the average of its evaluations on `scoring`, contexts
+/// whose inputs are the dither-driven part plus a circularly shifted copy of the disturbance-driven
+/// part. The shift breaks the link to the disturbance now in the residual (so no hypothesis can
+/// win by cancelling it), while the inputs keep their full spread, so a nonlinearity is judged at
+/// the amplitudes the plant saw (the average estimates `E[c(u) | dither]`).
+pub fn rank(
+    ctx: &OutputCtx,
+    inst: &OutputCtx,
+    scoring: &[OutputCtx],
+    r: &[f64],
+    inputs: &[usize],
+    split: &Split,
+    penalty: f64,
+) -> Vec<Scored> {
+    // Each hypothesis: fitted and scored on every fold; its score is the sum over folds.
+    let fold_score = |f: Option<&FittedTerm>| -> Option<(f64, f64, usize)> {
+        let mut total = (0.0, 0.0, 0);
+        for (fit_rows, val) in &split.folds {
+            let fitted = match f {
+                Some(f) => Some(fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?),
+                None => None,
+            };
+            let closed = split.features.is_some().then_some(scoring);
+            let s = score(ctx, closed, r, fitted, fit_rows, val.clone(), penalty)?;
+            total = (total.0 + s.score, total.1 + s.sse, s.complexity);
+        }
+        Some(total)
+    };
+    let fit_rows: Vec<usize> = split.fit.clone().collect();
+    let mut out: Vec<Scored> = Vec::new();
+    if let Some((score, sse, complexity)) = fold_score(None) {
+        out.push(Scored { fitted: None, sse, complexity, score });
+    }
+    for &i in inputs {
+        let mut terms = grid(ctx, i, split.fit.clone());
+        if ctx.has_channel[i] {
+            terms.push(Term::Bilinear(Vec::new()));
+        }
+        for t in terms {
+            // The bilinear products are chosen once by FROLS on the fit rows, then kept fixed.
+            let Some(f) = fit_term(ctx, inst, r, i, t, &fit_rows) else { continue };
+            if let Some((score, sse, complexity)) = fold_score(Some(&f)) {
+                out.push(Scored { fitted: Some(f), sse, complexity, score });
+            }
+        }
+    }
+    out.sort_by(|a, b| a.score.total_cmp(&b.score));
+    out
+}

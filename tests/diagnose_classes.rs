@@ -1,0 +1,82 @@
+//! Each vocabulary class is recovered (right channel, right physics) on a seeded concealed
+//! closed-loop case of the casebook (3000 samples, seeds 100 + k, the effect's residual variance
+//! 0.1–0.8 of the disturbance's). Classes the method does not yet recover on any casebook case
+//! are kept as ignored tests that name the failure, so the gap stays visible.
+
+use mpmwatch::diagnose::DiagnoseOptions;
+use mpmwatch::sim::scenarios::{casebook_specs, diagnose_record, run};
+
+fn recovers(case: &str) {
+    let spec =
+        casebook_specs(3000, 100).into_iter().find(|s| s.name.starts_with(case)).expect("casebook case");
+    let rec = run(&spec).unwrap();
+    assert!((0.1..=0.8).contains(&rec.effect_ratio), "{case} not concealed: ratio {}", rec.effect_ratio);
+    let d = diagnose_record(&rec, &DiagnoseOptions::default()).unwrap();
+    let want = (format!("u{}", spec.channel.0 + 1), format!("y{}", spec.channel.1 + 1));
+    let f = d.report.findings.iter().find(|f| (f.input.clone(), f.output.clone()) == want);
+    let f = f.unwrap_or_else(|| panic!("{case}: no finding on {want:?}: {:?}", d.report.findings));
+    assert_eq!(f.physics.name(), spec.effect.physics(), "{case}: {}", f.summary);
+}
+
+#[test]
+fn gain() {
+    recovers("c01_");
+}
+
+#[test]
+fn time_constant() {
+    recovers("c03_");
+}
+
+#[test]
+fn dead_time() {
+    recovers("c05_");
+}
+
+#[test]
+fn missing_coupling() {
+    recovers("c07_");
+}
+
+/// The 2×2 case: the SISO one (c09) is named backlash, play of the same total width.
+#[test]
+fn dead_zone() {
+    recovers("c10_");
+}
+
+#[test]
+fn saturation() {
+    recovers("c11_");
+}
+
+#[test]
+fn quadratic() {
+    recovers("c13_");
+}
+
+#[test]
+fn cubic() {
+    recovers("c15_");
+}
+
+#[test]
+fn bilinear() {
+    recovers("c17_");
+}
+
+#[test]
+fn backlash() {
+    recovers("c19_");
+}
+
+#[test]
+#[ignore = "known failure: the MI matrix flags no channel on c21/c22 (friction's information is spread over many lags)"]
+fn coulomb_friction() {
+    recovers("c21_");
+}
+
+#[test]
+#[ignore = "known failure: the MI matrix flags no channel on c23/c24"]
+fn abs_sensor() {
+    recovers("c23_");
+}
