@@ -61,7 +61,7 @@ fn state_space_and_transfer_function_agree() {
     for k in 0..u.len() {
         assert!((y_tf[k] - y_ss[k][0]).abs() < 1e-10, "k={k}");
     }
-    assert!((Mat::identity(2).expm()[(0, 0)] - std::f64::consts::E).abs() < 1e-14);
+    assert!((Mat::identity(2, 2).exp()[(0, 0)] - std::f64::consts::E).abs() < 1e-14);
 }
 
 #[test]

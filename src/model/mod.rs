@@ -10,7 +10,6 @@
 mod arx;
 mod error;
 mod hammerstein;
-mod matrix;
 mod mimo;
 mod state_space;
 mod transfer;
@@ -19,8 +18,7 @@ mod zoh;
 pub use arx::{Arx, ArxPredictor};
 pub use error::ModelError;
 pub use hammerstein::{Hammerstein, HammersteinFilter, StaticMap};
-pub use matrix::Mat;
 pub use mimo::{MimoModel, MimoState};
-pub use state_space::{SsState, StateSpace};
+pub use state_space::{Mat, SsState, StateSpace};
 pub use transfer::{DiscreteTf, TfFilter};
 pub use zoh::ContinuousTf;

@@ -1,7 +1,11 @@
 //! Discrete state-space models `x(t+1) = A x(t) + B u(t)`, `y(t) = C x(t) + D u(t)`.
 
+use nalgebra::{DMatrix, DVector};
+
 use super::error::ModelError;
-use super::matrix::Mat;
+
+/// A dense real matrix (nalgebra's, dynamically sized).
+pub type Mat = DMatrix<f64>;
 
 /// A discrete linear state-space model.
 #[derive(Debug, Clone, PartialEq)]
@@ -15,7 +19,7 @@ pub struct StateSpace {
 impl StateSpace {
     /// Builds the model; the matrix sizes must agree.
     pub fn new(a: Mat, b: Mat, c: Mat, d: Mat) -> Result<Self, ModelError> {
-        let n = a.rows();
+        let n = a.nrows();
         let dim = |what: &str, expected: usize, found: usize| {
             if expected == found {
                 Ok(())
@@ -23,11 +27,11 @@ impl StateSpace {
                 Err(ModelError::Dimension { what: what.into(), expected, found })
             }
         };
-        dim("columns of A", n, a.cols())?;
-        dim("rows of B", n, b.rows())?;
-        dim("columns of C", n, c.cols())?;
-        dim("rows of D", c.rows(), d.rows())?;
-        dim("columns of D", b.cols(), d.cols())?;
+        dim("columns of A", n, a.ncols())?;
+        dim("rows of B", n, b.nrows())?;
+        dim("columns of C", n, c.ncols())?;
+        dim("rows of D", c.nrows(), d.nrows())?;
+        dim("columns of D", b.ncols(), d.ncols())?;
         Ok(Self { a, b, c, d })
     }
 
@@ -38,27 +42,14 @@ impl StateSpace {
         }
         // validates the sizes before they are used as indices
         Self::new(a.clone(), b.clone(), c.clone(), d.clone())?;
-        let (n, m) = (a.rows(), b.cols());
+        let (n, m) = (a.nrows(), b.ncols());
+        // exp([[A, B], [0, 0]]·T) = [[Ad, Bd], [0, I]] (Van Loan)
         let mut aug = Mat::zeros(n + m, n + m);
-        for i in 0..n {
-            for j in 0..n {
-                aug[(i, j)] = a[(i, j)] * t;
-            }
-            for j in 0..m {
-                aug[(i, n + j)] = b[(i, j)] * t;
-            }
-        }
-        let e = aug.expm();
-        let mut ad = Mat::zeros(n, n);
-        let mut bd = Mat::zeros(n, m);
-        for i in 0..n {
-            for j in 0..n {
-                ad[(i, j)] = e[(i, j)];
-            }
-            for j in 0..m {
-                bd[(i, j)] = e[(i, n + j)];
-            }
-        }
+        aug.view_mut((0, 0), (n, n)).copy_from(&(a * t));
+        aug.view_mut((0, n), (n, m)).copy_from(&(b * t));
+        let e = aug.exp();
+        let ad = e.view((0, 0), (n, n)).into_owned();
+        let bd = e.view((0, n), (n, m)).into_owned();
         Self::new(ad, bd, c.clone(), d.clone())
     }
 
@@ -81,7 +72,7 @@ impl StateSpace {
 
     /// A fresh state at the origin.
     pub fn state(&self) -> SsState {
-        SsState { model: self.clone(), x: vec![0.0; self.a.rows()] }
+        SsState { model: self.clone(), x: DVector::zeros(self.a.nrows()) }
     }
 
     /// Simulates a whole record; `u[t]` is the input vector at sample t.
@@ -95,34 +86,33 @@ impl StateSpace {
 #[derive(Debug, Clone)]
 pub struct SsState {
     model: StateSpace,
-    x: Vec<f64>,
+    x: DVector<f64>,
 }
 
 impl SsState {
     /// The current state vector.
     pub fn x(&self) -> &[f64] {
-        &self.x
+        self.x.as_slice()
     }
 
     /// `C x(t)`: the output before the direct feed-through of `u(t)`.
     pub fn peek(&self) -> Vec<f64> {
-        self.model.c.mul_vec(&self.x)
+        (&self.model.c * &self.x).as_slice().to_vec()
     }
 
     /// Feeds `u(t)`, returns `y(t)` and advances the state.
     pub fn step(&mut self, u: &[f64]) -> Result<Vec<f64>, ModelError> {
-        if u.len() != self.model.b.cols() {
+        if u.len() != self.model.b.ncols() {
             return Err(ModelError::Dimension {
                 what: "state-space input vector".into(),
-                expected: self.model.b.cols(),
+                expected: self.model.b.ncols(),
                 found: u.len(),
             });
         }
-        let y: Vec<f64> = self.peek().iter().zip(self.model.d.mul_vec(u)).map(|(a, b)| a + b).collect();
-        let ax = self.model.a.mul_vec(&self.x);
-        let bu = self.model.b.mul_vec(u);
-        self.x = ax.iter().zip(&bu).map(|(a, b)| a + b).collect();
-        Ok(y)
+        let u = DVector::from_column_slice(u);
+        let y = &self.model.c * &self.x + &self.model.d * &u;
+        self.x = &self.model.a * &self.x + &self.model.b * &u;
+        Ok(y.as_slice().to_vec())
     }
 }
 
@@ -133,9 +123,9 @@ mod tests {
     #[test]
     fn double_integrator_zoh_by_hand() {
         // x1' = x2, x2' = u: Ad = [[1, T], [0, 1]], Bd = [T²/2, T]
-        let a = Mat::from_rows(&[vec![0.0, 1.0], vec![0.0, 0.0]]).unwrap();
-        let b = Mat::from_rows(&[vec![0.0], vec![1.0]]).unwrap();
-        let c = Mat::from_rows(&[vec![1.0, 0.0]]).unwrap();
+        let a = Mat::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+        let b = Mat::from_row_slice(2, 1, &[0.0, 1.0]);
+        let c = Mat::from_row_slice(1, 2, &[1.0, 0.0]);
         let d = Mat::zeros(1, 1);
         let t = 0.4;
         let ss = StateSpace::zoh(&a, &b, &c, &d, t).unwrap();
@@ -152,15 +142,15 @@ mod tests {
 
     #[test]
     fn wrong_sizes_are_errors() {
-        let a = Mat::identity(2);
+        let a = Mat::identity(2, 2);
         let b = Mat::zeros(3, 1);
         assert!(StateSpace::new(a, b, Mat::zeros(1, 2), Mat::zeros(1, 1)).is_err());
-        let ss =
-            StateSpace::new(Mat::identity(1), Mat::zeros(1, 1), Mat::zeros(1, 1), Mat::zeros(1, 1)).unwrap();
+        let ss = StateSpace::new(Mat::identity(1, 1), Mat::zeros(1, 1), Mat::zeros(1, 1), Mat::zeros(1, 1))
+            .unwrap();
         assert!(ss.state().step(&[1.0, 2.0]).is_err());
         let bad_b = Mat::zeros(2, 1);
         assert!(
-            StateSpace::zoh(&Mat::identity(1), &bad_b, &Mat::zeros(1, 1), &Mat::zeros(1, 1), 0.1).is_err()
+            StateSpace::zoh(&Mat::identity(1, 1), &bad_b, &Mat::zeros(1, 1), &Mat::zeros(1, 1), 0.1).is_err()
         );
     }
 }

@@ -1,8 +1,7 @@
 //! Continuous transfer functions and their zero-order-hold discretisation.
 
 use super::error::{ModelError, check_poly};
-use super::matrix::Mat;
-use super::state_space::StateSpace;
+use super::state_space::{Mat, StateSpace};
 use super::transfer::DiscreteTf;
 
 /// `G(s) = e^(−θs) · N(s)/D(s)`, polynomials in descending powers of s.
@@ -87,15 +86,15 @@ impl ContinuousTf {
         let delay = samples.round() as usize;
         let (a, b, c, d) = self.realisation();
         let ss = StateSpace::zoh(&a, &b, &c, &d, t)?;
-        let n = a.rows();
+        let n = a.nrows();
         let ad = ss.a();
         let char_poly = characteristic_polynomial(ad);
         // Markov parameters h0 = D, hk = C Ad^(k-1) Bd
         let mut h = vec![d[(0, 0)]];
         let mut x = ss.b().clone();
         for _ in 0..n {
-            h.push(c.mul(&x)[(0, 0)]);
-            x = ad.mul(&x);
+            h.push((&c * &x)[(0, 0)]);
+            x = ad * &x;
         }
         let num: Vec<f64> = (0..=n).map(|k| (0..=k).map(|i| char_poly[i] * h[k - i]).sum()).collect();
         DiscreteTf::new(num, char_poly, delay)
@@ -104,15 +103,14 @@ impl ContinuousTf {
 
 /// `det(zI − A) = z^n + p1 z^(n−1) + … + pn`, returned as `[1, p1, …, pn]` (Faddeev–LeVerrier).
 pub(crate) fn characteristic_polynomial(a: &Mat) -> Vec<f64> {
-    let n = a.rows();
+    let n = a.nrows();
     let mut p = vec![1.0];
-    let mut m = Mat::identity(n);
+    let mut m = Mat::identity(n, n);
     for k in 1..=n {
-        let am = a.mul(&m);
-        let trace: f64 = (0..n).map(|i| am[(i, i)]).sum();
-        let pk = -trace / k as f64;
+        let am = a * &m;
+        let pk = -am.trace() / k as f64;
         p.push(pk);
-        m = am.add(&Mat::identity(n).scale(pk));
+        m = am + Mat::identity(n, n) * pk;
     }
     p
 }
