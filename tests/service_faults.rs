@@ -138,7 +138,7 @@ async fn jumps_of_the_source_clock_are_counted_and_survived() {
     // new timeline is taken, and the hours in between are a gap.
     toy.k += 10_800;
     let v = publish_until(&p, &mut toy, http, "rows on the new timeline", |v| {
-        count(v, "time_jumps") == 1 && count(v, "window_contiguous") >= 50
+        count(v, "time_jumps") == 1 && count(v, "window_len") >= 200
     })
     .await;
     assert!(dropped(&v, "time_jump") > 1, "{v}");

@@ -127,7 +127,7 @@ impl Store {
         let conn = self.conn();
         let page: u64 = conn.pragma_query_value(None, "page_size", |r| r.get(0))?;
         let pages = (max_bytes / page.max(1)).max(1);
-        let set: u64 = conn.pragma_query_value(None, &format!("max_page_count = {pages}"), |r| r.get(0))?;
+        let set: u64 = conn.pragma_update_and_check(None, "max_page_count", pages, |r| r.get(0))?;
         Ok(set)
     }
 
