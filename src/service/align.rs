@@ -479,6 +479,63 @@ mod tests {
         assert_eq!(run(&mut b, 0, 5.0, 1.0).0, Err(DropReason::Duplicate));
     }
 
+    /// Offers one sample per column at `t`; returns the closed slots and the drops.
+    fn round(a: &mut Aligner, t: f64) -> (Vec<i64>, Vec<DropReason>) {
+        let mut out = Vec::new();
+        let drops = (0..a.required.len()).filter_map(|c| a.offer(c, t, 1.0, &mut out).err()).collect();
+        (out.iter().filter(|r| r.values.iter().all(Option::is_some)).map(|r| r.slot).collect(), drops)
+    }
+
+    #[test]
+    fn a_single_bogus_time_ahead_is_a_glitch_and_disturbs_nothing() {
+        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
+        for t in 0..10 {
+            round(&mut a, t as f64);
+        }
+        let mut out = Vec::new();
+        assert_eq!(a.offer(0, 10_800.0, 1.0, &mut out), Err(DropReason::TimeJump));
+        assert!(out.is_empty(), "no open row closes on a bogus time");
+        assert_eq!(round(&mut a, 10.0), (vec![10], vec![]));
+        assert!(a.take_jumps().is_empty());
+    }
+
+    #[test]
+    fn a_jump_ahead_confirmed_by_all_columns_becomes_the_timeline() {
+        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
+        for t in 0..10 {
+            round(&mut a, t as f64);
+        }
+        // Two rows' worth of samples on the new timeline: four, dropped while unconfirmed.
+        let (_, d1) = round(&mut a, 10_000.0);
+        let (_, d2) = round(&mut a, 10_001.0);
+        assert_eq!([d1, d2].concat(), vec![DropReason::TimeJump; 4]);
+        assert_eq!(a.take_jumps(), vec![Jump { from: 9, to: 10_001 }]);
+        assert_eq!(round(&mut a, 10_002.0), (vec![10_002], vec![]));
+        assert_eq!(round(&mut a, 10_003.0), (vec![10_003], vec![]));
+    }
+
+    #[test]
+    fn a_jump_back_needs_a_longer_uninterrupted_run_and_restarts_the_timeline() {
+        let mut a = Aligner::new(1.0, 2, 10, vec![true, true]);
+        for t in 1000..1020 {
+            round(&mut a, t as f64);
+        }
+        // Interleaved with the current timeline it is a back-fill: late, never a jump.
+        for t in 0..10 {
+            assert_eq!(round(&mut a, t as f64).1, vec![DropReason::Late; 2]);
+            round(&mut a, (1020 + t) as f64);
+        }
+        assert!(a.take_jumps().is_empty());
+        // Alone it is a clock set back: (tolerance + 1) rows' worth confirm it.
+        for t in 100..103 {
+            assert_eq!(round(&mut a, t as f64).1, vec![DropReason::Late; 2]);
+        }
+        let jumps = a.take_jumps();
+        assert_eq!(jumps, vec![Jump { from: 1029, to: 102 }]);
+        assert!(jumps[0].is_backward());
+        assert_eq!(round(&mut a, 103.0), (vec![103], vec![]));
+    }
+
     #[test]
     fn memory_stays_bounded_whatever_the_times() {
         let mut a = Aligner::new(1.0, 4, 10, vec![true, true]);

@@ -728,6 +728,50 @@ surrogates = 1
     }
 
     #[test]
+    fn the_token_comes_from_the_file_a_named_variable_or_mpmwatch_token_and_never_shows() {
+        fn env(vars: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
+            let vars: Vec<(String, String)> = vars.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+            move |k: &str| vars.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone())
+        }
+        let long = "0123456789abcdef0123";
+        let c = Config::parse(&format!("[http]\ntoken = \"{long}\"\n{GOOD}"), "t").unwrap();
+        assert_eq!(c.http.resolve_token(env(&[])).unwrap().unwrap().expose(), long);
+        assert!(!format!("{c:?}").contains(long), "Debug redacts the token");
+        let c = Config::parse(&format!("[http]\ntoken_env = \"API_TOKEN\"\n{GOOD}"), "t").unwrap();
+        assert_eq!(
+            c.http.resolve_token(env(&[("API_TOKEN", long), (TOKEN_ENV, "other-token-0123456789")])).unwrap(),
+            Some(Secret::new(long))
+        );
+        let e = c.http.resolve_token(env(&[])).unwrap_err();
+        assert!(e.contains("API_TOKEN"), "{e}");
+        let c = Config::parse(GOOD, "t").unwrap();
+        assert_eq!(c.http.resolve_token(env(&[])).unwrap(), None);
+        assert_eq!(c.http.resolve_token(env(&[(TOKEN_ENV, long)])).unwrap(), Some(Secret::new(long)));
+        assert!(c.http.resolve_token(env(&[(TOKEN_ENV, "short")])).is_err());
+        let Err(ConfigError::Invalid { problems, .. }) =
+            Config::parse(&format!("[http]\ntoken = \"short\"\n{GOOD}"), "t")
+        else {
+            panic!()
+        };
+        assert!(problems[0].starts_with("http.token:"), "{problems:?}");
+    }
+
+    #[test]
+    fn huge_or_degenerate_numbers_are_refused_not_allocated() {
+        let text = format!(
+            "{GOOD}window = 1000000000000\ntolerance = 9223372036854775807\nk = 9223372036854775807\nevery = 1e-300\n"
+        );
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&text, "t") else { panic!() };
+        let all = problems.join("\n");
+        for key in [".window:", ".tolerance:", ".min_samples:", ".every:"] {
+            assert!(all.contains(key), "{key} missing from\n{all}");
+        }
+        let text = format!("[http]\nmax_body_bytes = 0\nrate_limit_per_s = -1\n{GOOD}");
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&text, "t") else { panic!() };
+        assert_eq!(problems.len(), 2, "{problems:?}");
+    }
+
+    #[test]
     fn unknown_keys_are_named() {
         let Err(ConfigError::Parse { message, .. }) = Config::parse(&format!("{GOOD}windw = 3\n"), "t")
         else {

@@ -210,6 +210,15 @@ mod tests {
     }
 
     #[test]
+    fn oversized_payloads_and_batches_are_refused() {
+        let big = vec![b' '; MAX_PAYLOAD_BYTES + 1];
+        assert!(matches!(decode(&big), Err(PayloadError::TooLarge(_))));
+        let n = MAX_BATCH + 1;
+        let batch = encode_batch(&vec![1.0; n], &vec![0.0; n]);
+        assert!(matches!(decode(batch.as_bytes()), Err(PayloadError::TooLarge(_))));
+    }
+
+    #[test]
     fn encoded_payloads_decode() {
         assert_eq!(decode(encode(2.5, -1.0).as_bytes()).unwrap(), vec![Sample { t: 2.5, v: -1.0 }]);
         assert_eq!(decode(encode_batch(&[1.0], &[2.0]).as_bytes()).unwrap().len(), 1);
