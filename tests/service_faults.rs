@@ -82,7 +82,8 @@ async fn the_service_reconnects_after_a_router_restart() {
 #[tokio::test(flavor = "multi_thread")]
 async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
     let (zport, http) = (free_port(), free_port());
-    let service = Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.expect("service");
+    let service =
+        Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.expect("service");
     let p = publisher(zport).await;
     wait_routed(&p, http).await;
     let mut toy = Toy::new(2);
@@ -114,7 +115,8 @@ async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
 #[tokio::test(flavor = "multi_thread")]
 async fn jumps_of_the_source_clock_are_counted_and_survived() {
     let (zport, http) = (free_port(), free_port());
-    let service = Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.expect("service");
+    let service =
+        Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.expect("service");
     let p = publisher(zport).await;
     wait_routed(&p, http).await;
     let mut toy = Toy::new(3);

@@ -85,7 +85,12 @@ async fn kill_9_mid_ingest_loses_at_most_the_last_flush_interval() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
-    let (z1, h1, z2, h2) = (fault_support::free_port(), fault_support::free_port(), fault_support::free_port(), fault_support::free_port());
+    let (z1, h1, z2, h2) = (
+        fault_support::free_port(),
+        fault_support::free_port(),
+        fault_support::free_port(),
+        fault_support::free_port(),
+    );
     let cfg = |z: u16, h: u16| {
         config_text(z, h, Some(&store), "every = 3600").replace("window = 300\n", "window = 5000\n")
     };

@@ -54,7 +54,9 @@ async fn without_a_token_the_api_is_read_only() {
     let msg = a.json()["error"].as_str().unwrap_or_default().to_string();
     assert!(msg.contains("token_env") && msg.contains("MPMWATCH_TOKEN"), "says how to configure one: {msg}");
     // A token presented to a service that has none changes nothing.
-    let a = request(h, "POST", "/api/v1/controllers/c1/run", &[&format!("Authorization: Bearer {TOKEN}")], b"").await;
+    let a =
+        request(h, "POST", "/api/v1/controllers/c1/run", &[&format!("Authorization: Bearer {TOKEN}")], b"")
+            .await;
     assert_eq!(a.status, 403);
     service.stop().await;
 }
@@ -73,7 +75,9 @@ async fn non_get_needs_the_token_bodies_and_rates_are_limited_and_logs_keep_it_s
     let (z, h) = (free_port(), free_port());
     let text = with_http(
         &config_text(z, h, None, "every = 3600"),
-        &format!("token = \"{TOKEN}\"\nmax_body_bytes = 1024\nrate_limit_per_s = 1000\nrate_limit_burst = 1000"),
+        &format!(
+            "token = \"{TOKEN}\"\nmax_body_bytes = 1024\nrate_limit_per_s = 1000\nrate_limit_burst = 1000"
+        ),
     );
     let cfg = config(&text);
     let debug = format!("{cfg:?} {:?}", cfg.http);
@@ -142,7 +146,8 @@ async fn non_get_needs_the_token_bodies_and_rates_are_limited_and_logs_keep_it_s
 #[tokio::test(flavor = "multi_thread")]
 async fn a_token_env_naming_an_unset_variable_stops_the_start() {
     let (z, h) = (free_port(), free_port());
-    let text = with_http(&config_text(z, h, None, "every = 3600"), "token_env = \"MPMWATCH_TEST_UNSET_VARIABLE\"");
+    let text =
+        with_http(&config_text(z, h, None, "every = 3600"), "token_env = \"MPMWATCH_TEST_UNSET_VARIABLE\"");
     let Err(e) = Service::start(config(&text)).await else { panic!("started without its token") };
     assert!(e.to_string().contains("MPMWATCH_TEST_UNSET_VARIABLE"), "{e}");
 }

@@ -567,7 +567,10 @@ impl ControllerConfig {
                         p.push(format!("{mkey}.cv: {:?} is not one of the CV tags {:?}", ch.cv, self.cv));
                     }
                     if ch.delay > MAX_DELAY {
-                        p.push(format!("{mkey}.delay: {} is too long (at most {MAX_DELAY} samples)", ch.delay));
+                        p.push(format!(
+                            "{mkey}.delay: {} is too long (at most {MAX_DELAY} samples)",
+                            ch.delay
+                        ));
                         continue;
                     }
                     if let Err(e) = channel(ch) {
@@ -592,7 +595,10 @@ impl ControllerConfig {
             p.push(format!("{key}.window: {} is too long (at most {MAX_WINDOW} samples)", self.window));
         }
         if self.tolerance > MAX_TOLERANCE {
-            p.push(format!("{key}.tolerance: {} is too large (at most {MAX_TOLERANCE} samples)", self.tolerance));
+            p.push(format!(
+                "{key}.tolerance: {} is too large (at most {MAX_TOLERANCE} samples)",
+                self.tolerance
+            ));
         }
         if self.surrogates > MAX_SURROGATES {
             p.push(format!("{key}.surrogates: {} is too many (at most {MAX_SURROGATES})", self.surrogates));
@@ -730,7 +736,8 @@ surrogates = 1
     #[test]
     fn the_token_comes_from_the_file_a_named_variable_or_mpmwatch_token_and_never_shows() {
         fn env(vars: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
-            let vars: Vec<(String, String)> = vars.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+            let vars: Vec<(String, String)> =
+                vars.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
             move |k: &str| vars.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone())
         }
         let long = "0123456789abcdef0123";

@@ -186,7 +186,11 @@ impl Metrics {
         registry.register("mpm_active_alarms", "Channels whose alarm is raised", m.active_alarms.clone());
         registry.register("mpm_gap_rows", "Sample slots missing between window rows", m.gap_rows.clone());
         registry.register("mpm_time_jumps", "Confirmed jumps of the source clock", m.time_jumps.clone());
-        registry.register("mpm_store_errors", "Failed writes to the store, by operation", m.store_errors.clone());
+        registry.register(
+            "mpm_store_errors",
+            "Failed writes to the store, by operation",
+            m.store_errors.clone(),
+        );
         registry.register(
             "mpm_store_ok",
             "1 while the store's last write succeeded (or no store is configured), 0 while it fails",

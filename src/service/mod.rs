@@ -149,7 +149,8 @@ impl Service {
     /// Opens the store and restores the windows, opens the zenoh session, starts ingest,
     /// queryables, schedulers, the store flush and the HTTP server.
     pub async fn start(config: Config) -> Result<Self, ServiceError> {
-        let token = config.http.resolve_token(|name| std::env::var(name).ok()).map_err(ServiceError::Config)?;
+        let token =
+            config.http.resolve_token(|name| std::env::var(name).ok()).map_err(ServiceError::Config)?;
         if token.is_none() {
             tracing::info!(
                 "no HTTP API token configured (http.token_env or {}): non-GET endpoints answer 403",

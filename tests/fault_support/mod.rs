@@ -9,7 +9,10 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 /// A port free on 127.0.0.1 now (the OS picks it; tests on this machine run in parallel with
 /// other test binaries, so fixed ports could collide).
 pub fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).map(|a| a.port()).expect("free port")
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .expect("free port")
 }
 
 /// An HTTP answer.
@@ -117,13 +120,15 @@ pub async fn client(endpoint: &str) -> zenoh::Session {
 }
 
 /// `c1` of the toy loop through a router as a client, with `extra` lines in the controller.
-pub fn client_config(router_port: u16, http_port: u16, store: Option<&std::path::Path>, extra: &str) -> String {
+pub fn client_config(
+    router_port: u16,
+    http_port: u16,
+    store: Option<&std::path::Path>,
+    extra: &str,
+) -> String {
     super::service_support::config_text(0, http_port, store, extra)
         .replace("mode = \"peer\"", "mode = \"client\"")
-        .replace(
-            "listen = [\"tcp/127.0.0.1:0\"]",
-            &format!("connect = [\"tcp/127.0.0.1:{router_port}\"]"),
-        )
+        .replace("listen = [\"tcp/127.0.0.1:0\"]", &format!("connect = [\"tcp/127.0.0.1:{router_port}\"]"))
 }
 
 /// Like `wait_routed`, for a publisher that comes after another: probes on an unknown tag until
