@@ -577,14 +577,17 @@ impl ControllerConfig {
                         p.push(format!("{mkey}: {e}"));
                     }
                 }
-                if p.is_empty()
-                    && let Ok(model) = self.nominal_model()
-                    && !model.is_strictly_proper()
-                {
-                    p.push(format!(
-                        "{key}.model: the model must be strictly proper (delay ≥ 1 or b[0] = 0): a residual \
-                         needs the prediction before the MV moves"
-                    ));
+                if p.is_empty() {
+                    match self.nominal_model() {
+                        Ok(model) if !model.is_strictly_proper() => p.push(format!(
+                            "{key}.model: the model must be strictly proper (delay ≥ 1 or b[0] = 0): a \
+                             residual needs the prediction before the MV moves"
+                        )),
+                        Ok(_) => {}
+                        // e.g. a channel given twice (seen while writing the config fuzz target): it used to pass
+                        // validation and stop the service at start.
+                        Err(e) => p.push(format!("{key}.model: {e}")),
+                    }
                 }
             }
         }
@@ -812,6 +815,9 @@ map = "square"
         let c = Config::parse(text, "t").unwrap();
         let m = c.controllers[0].nominal_model().unwrap();
         assert_eq!((m.outputs(), m.inputs()), (1, 2));
+        let twice = text.replace("mv = \"u2\"\ncv = \"y1\"", "mv = \"u1\"\ncv = \"y1\"");
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&twice, "t") else { panic!() };
+        assert!(problems[0].contains("given twice"), "{problems:?}");
         let bad = text.replace("delay = 2", "delay = 0");
         let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&bad, "t") else { panic!() };
         assert!(problems[0].contains("strictly proper"), "{problems:?}");
