@@ -21,6 +21,8 @@ OUT
           <prefix>/<controller>/matrix   the latest result after each run; also a queryable
   HTTP    GET /  /healthz  /metrics  /api/v1/controllers  /api/v1/controllers/{id}/matrix
           /api/v1/controllers/{id}/alarms  /api/v1/controllers/{id}/profile?mv=..&cv=..
+          POST /api/v1/controllers/{id}/run (analyse now) needs Authorization: Bearer <token>,
+          the token from [http] token_env / token or MPMWATCH_TOKEN; without one, 403
   store   SQLite (WAL): window samples and alarm history, restored on start
 
 CONFIG

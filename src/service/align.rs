@@ -6,6 +6,15 @@
 //! a complete row closes as soon as the row before it has; any row closes, complete or not, once
 //! the newest sample is `tolerance` slots past it. An incomplete closed row is a gap. Samples for
 //! a closed slot are dropped, so memory stays bounded by `tolerance` whatever the input does.
+//!
+//! Jumps of the source clock: a sample far ahead of the newest slot (more than the jump
+//! threshold, `4 (tolerance + 1)` slots) or older than the window is not trusted at once: one
+//! bogus time would otherwise close every open row (ahead), and a clock set back would have
+//! everything that follows refused (behind). Such samples start a *jump candidate* and are
+//! dropped, as `time_jump` ahead and as `late` behind. A
+//! sample on the current timeline cancels the candidate (a glitch); a candidate fed without
+//! interruption by enough samples from at least half the columns becomes the new timeline
+//! (a jump forward is an ordinary gap once confirmed; a jump back restarts the window).
 
 use std::collections::BTreeMap;
 
@@ -29,11 +38,14 @@ pub enum DropReason {
     /// Stamped more than a day after the wall clock: a bogus time that would otherwise close
     /// every open row and make all later samples look out of order.
     Future,
+    /// Far ahead of or behind the current timeline: held against a possible jump of the source
+    /// clock until the jump is confirmed or cancelled (see the module doc).
+    TimeJump,
 }
 
 impl DropReason {
     /// Every reason, for metrics that must show zeros too.
-    pub const ALL: [DropReason; 7] = [
+    pub const ALL: [DropReason; 8] = [
         Self::BadPayload,
         Self::UnknownTag,
         Self::NonFinite,
@@ -41,6 +53,7 @@ impl DropReason {
         Self::OutOfOrder,
         Self::Late,
         Self::Future,
+        Self::TimeJump,
     ];
 
     /// The metric label.
@@ -53,6 +66,7 @@ impl DropReason {
             Self::OutOfOrder => "out_of_order",
             Self::Late => "late",
             Self::Future => "future",
+            Self::TimeJump => "time_jump",
         }
     }
 }
@@ -66,6 +80,33 @@ pub struct ClosedRow {
     pub values: Vec<Option<f64>>,
 }
 
+/// A confirmed jump of the source clock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Jump {
+    /// Newest slot of the old timeline.
+    pub from: i64,
+    /// First slot of the new one.
+    pub to: i64,
+}
+
+impl Jump {
+    /// The clock went back: rows already kept lie in the new timeline's future.
+    pub fn is_backward(&self) -> bool {
+        self.to <= self.from
+    }
+}
+
+/// Samples far from the current timeline, possibly a new one.
+#[derive(Debug, Clone)]
+struct Candidate {
+    /// Newest slot seen on it.
+    newest: i64,
+    /// Samples on it since it started, uninterrupted by the current timeline.
+    samples: usize,
+    /// Columns seen on it.
+    columns: Vec<bool>,
+}
+
 /// Snaps samples to the grid and closes rows in order.
 #[derive(Debug, Clone)]
 pub struct Aligner {
@@ -76,6 +117,8 @@ pub struct Aligner {
     pending: BTreeMap<i64, Vec<Option<f64>>>,
     newest: Option<i64>,
     closed_through: Option<i64>,
+    candidate: Option<Candidate>,
+    jumps: Vec<Jump>,
 }
 
 impl Aligner {
@@ -89,7 +132,76 @@ impl Aligner {
             pending: BTreeMap::new(),
             newest: None,
             closed_through: None,
+            candidate: None,
+            jumps: Vec::new(),
         }
+    }
+
+    /// Slots away from the newest beyond which a sample is a jump candidate.
+    pub fn jump_threshold(&self) -> i64 {
+        4 * (self.tolerance + 1)
+    }
+
+    /// Uninterrupted samples that confirm a jump forward: two rows' worth. Little is lost when
+    /// a publisher returns after an outage (a real gap), and one bogus batch is not enough.
+    fn confirm_forward(&self) -> usize {
+        2 * self.required.len()
+    }
+
+    /// Uninterrupted samples that confirm a jump back: `tolerance + 1` rows' worth, since a
+    /// confirmed jump back discards the window and a historian back-fill looks the same at first.
+    fn confirm_backward(&self) -> usize {
+        (self.tolerance as usize + 1) * self.required.len()
+    }
+
+    /// Jumps confirmed since the last call, oldest first (the caller resets what depends on
+    /// the timeline).
+    pub fn take_jumps(&mut self) -> Vec<Jump> {
+        std::mem::take(&mut self.jumps)
+    }
+
+    /// Whether `slot` lies so far from the current timeline that it may be a jump, and what it
+    /// is counted as meanwhile: `time_jump` ahead, `late` behind (older than the window).
+    fn far(&self, slot: i64) -> Option<DropReason> {
+        if self.newest.is_some_and(|n| slot > n.saturating_add(self.jump_threshold())) {
+            Some(DropReason::TimeJump)
+        } else if self.closed_through.is_some_and(|c| slot <= c.saturating_sub(self.window)) {
+            Some(DropReason::Late)
+        } else {
+            None
+        }
+    }
+
+    /// Feeds a far sample to the candidate; `true` when it confirms the jump.
+    fn feed_candidate(&mut self, col: usize, slot: i64) -> bool {
+        let j = self.jump_threshold();
+        let width = self.required.len();
+        let same = self.candidate.as_ref().is_some_and(|c| (slot - c.newest).abs() <= j);
+        if !same {
+            self.candidate = Some(Candidate { newest: slot, samples: 0, columns: vec![false; width] });
+        }
+        let (forward, backward) = (self.confirm_forward(), self.confirm_backward());
+        let newest = self.newest;
+        let Some(c) = self.candidate.as_mut() else { return false };
+        c.newest = c.newest.max(slot);
+        c.samples += 1;
+        c.columns[col] = true;
+        let distinct = c.columns.iter().filter(|&&x| x).count();
+        let needed = if newest.is_some_and(|n| c.newest < n) { backward } else { forward };
+        c.samples >= needed && 2 * distinct >= width
+    }
+
+    /// Makes the candidate's timeline the current one: open rows close as gaps, and the next
+    /// samples start afresh after `to − 1`.
+    fn confirm_jump(&mut self, to: i64, out: &mut Vec<ClosedRow>) {
+        let from = self.newest.unwrap_or(to);
+        while let Some((slot, values)) = self.pending.pop_first() {
+            out.push(ClosedRow { slot, values });
+        }
+        self.candidate = None;
+        self.closed_through = None;
+        self.newest = Some(to);
+        self.jumps.push(Jump { from, to });
     }
 
     /// Continues after rows up to `slot` were restored from the store.
@@ -115,6 +227,13 @@ impl Aligner {
             return Err(DropReason::NonFinite);
         }
         let slot = self.slot(t).ok_or(DropReason::BadPayload)?;
+        if let Some(reason) = self.far(slot) {
+            if self.feed_candidate(col, slot) {
+                let to = self.candidate.as_ref().map_or(slot, |c| c.newest);
+                self.confirm_jump(to, out);
+            }
+            return Err(reason);
+        }
         if let Some(c) = self.closed_through
             && slot <= c
         {
@@ -126,6 +245,8 @@ impl Aligner {
             return Err(DropReason::Duplicate);
         }
         row[col] = Some(v);
+        // A sample on the current timeline: a pending jump was a glitch.
+        self.candidate = None;
         self.newest = Some(self.newest.map_or(slot, |n| n.max(slot)));
         self.close(out);
         Ok(())
@@ -256,6 +377,14 @@ impl Residuals {
         Some(WindowRow { slot: row.slot, mv, dither, cv, residual })
     }
 
+    /// Forgets the model state after a jump of the clock back: it restarts (warm-up) at the
+    /// next row as after a long gap.
+    pub fn reset(&mut self) {
+        self.state = None;
+        self.last_slot = None;
+        self.last_u.clear();
+    }
+
     /// Runs the model through the MVs of restored rows so it continues where it stopped.
     pub fn replay(&mut self, rows: &[WindowRow]) {
         if self.model.is_none() {
@@ -348,6 +477,63 @@ mod tests {
         let mut b = Aligner::new(1.0, 2, 10, vec![true, true]);
         let _ = run(&mut b, 0, 5.0, 1.0);
         assert_eq!(run(&mut b, 0, 5.0, 1.0).0, Err(DropReason::Duplicate));
+    }
+
+    /// Offers one sample per column at `t`; returns the closed slots and the drops.
+    fn round(a: &mut Aligner, t: f64) -> (Vec<i64>, Vec<DropReason>) {
+        let mut out = Vec::new();
+        let drops = (0..a.required.len()).filter_map(|c| a.offer(c, t, 1.0, &mut out).err()).collect();
+        (out.iter().filter(|r| r.values.iter().all(Option::is_some)).map(|r| r.slot).collect(), drops)
+    }
+
+    #[test]
+    fn a_single_bogus_time_ahead_is_a_glitch_and_disturbs_nothing() {
+        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
+        for t in 0..10 {
+            round(&mut a, t as f64);
+        }
+        let mut out = Vec::new();
+        assert_eq!(a.offer(0, 10_800.0, 1.0, &mut out), Err(DropReason::TimeJump));
+        assert!(out.is_empty(), "no open row closes on a bogus time");
+        assert_eq!(round(&mut a, 10.0), (vec![10], vec![]));
+        assert!(a.take_jumps().is_empty());
+    }
+
+    #[test]
+    fn a_jump_ahead_confirmed_by_all_columns_becomes_the_timeline() {
+        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
+        for t in 0..10 {
+            round(&mut a, t as f64);
+        }
+        // Two rows' worth of samples on the new timeline: four, dropped while unconfirmed.
+        let (_, d1) = round(&mut a, 10_000.0);
+        let (_, d2) = round(&mut a, 10_001.0);
+        assert_eq!([d1, d2].concat(), vec![DropReason::TimeJump; 4]);
+        assert_eq!(a.take_jumps(), vec![Jump { from: 9, to: 10_001 }]);
+        assert_eq!(round(&mut a, 10_002.0), (vec![10_002], vec![]));
+        assert_eq!(round(&mut a, 10_003.0), (vec![10_003], vec![]));
+    }
+
+    #[test]
+    fn a_jump_back_needs_a_longer_uninterrupted_run_and_restarts_the_timeline() {
+        let mut a = Aligner::new(1.0, 2, 10, vec![true, true]);
+        for t in 1000..1020 {
+            round(&mut a, t as f64);
+        }
+        // Interleaved with the current timeline it is a back-fill: late, never a jump.
+        for t in 0..10 {
+            assert_eq!(round(&mut a, t as f64).1, vec![DropReason::Late; 2]);
+            round(&mut a, (1020 + t) as f64);
+        }
+        assert!(a.take_jumps().is_empty());
+        // Alone it is a clock set back: (tolerance + 1) rows' worth confirm it.
+        for t in 100..103 {
+            assert_eq!(round(&mut a, t as f64).1, vec![DropReason::Late; 2]);
+        }
+        let jumps = a.take_jumps();
+        assert_eq!(jumps, vec![Jump { from: 1029, to: 102 }]);
+        assert!(jumps[0].is_backward());
+        assert_eq!(round(&mut a, 103.0), (vec![103], vec![]));
     }
 
     #[test]

@@ -104,6 +104,37 @@ impl Default for ZenohConfig {
     }
 }
 
+/// A secret string (the HTTP API token). Its `Debug` never shows the value and it has no
+/// `Display`, so neither `{:?}` of the config nor a tracing field can leak it; the value is
+/// reachable only through [`Secret::expose`].
+#[derive(Clone, Default, PartialEq, Eq, Deserialize)]
+#[serde(transparent)]
+pub struct Secret(String);
+
+impl Secret {
+    /// Wraps a value.
+    pub fn new(value: impl Into<String>) -> Self {
+        Self(value.into())
+    }
+
+    /// The value, for the one comparison that needs it.
+    pub fn expose(&self) -> &str {
+        &self.0
+    }
+}
+
+impl std::fmt::Debug for Secret {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Secret(<redacted>)")
+    }
+}
+
+/// The environment variable holding the HTTP API token when the config names none.
+pub const TOKEN_ENV: &str = "MPMWATCH_TOKEN";
+
+/// Shortest token accepted: a bearer token is a password, 16 random characters at least.
+pub const MIN_TOKEN_LEN: usize = 16;
+
 /// HTTP API settings.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -111,15 +142,76 @@ pub struct HttpConfig {
     /// Address and port; loopback by default (put a reverse proxy in front to expose it).
     #[serde(default = "default_bind")]
     pub bind: String,
+    /// The bearer token that non-GET requests must present, written in the file. Prefer
+    /// `token_env`: a file is more often copied around than an environment.
+    #[serde(default)]
+    pub token: Option<Secret>,
+    /// The name of an environment variable holding the bearer token.
+    #[serde(default)]
+    pub token_env: Option<String>,
+    /// Largest request body accepted, bytes; larger requests get 413.
+    #[serde(default = "default_max_body")]
+    pub max_body_bytes: usize,
+    /// Requests per second refilled into the instance-wide token bucket; 0 turns the rate limit
+    /// off. Past it requests get 429 with `Retry-After`.
+    #[serde(default = "default_rate")]
+    pub rate_limit_per_s: f64,
+    /// Bucket size: how many requests may come at once after a quiet spell.
+    #[serde(default = "default_burst")]
+    pub rate_limit_burst: u32,
 }
 
 fn default_bind() -> String {
     "127.0.0.1:9464".into()
 }
+fn default_max_body() -> usize {
+    64 * 1024
+}
+fn default_rate() -> f64 {
+    50.0
+}
+fn default_burst() -> u32 {
+    100
+}
 
 impl Default for HttpConfig {
     fn default() -> Self {
-        Self { bind: default_bind() }
+        Self {
+            bind: default_bind(),
+            token: None,
+            token_env: None,
+            max_body_bytes: default_max_body(),
+            rate_limit_per_s: default_rate(),
+            rate_limit_burst: default_burst(),
+        }
+    }
+}
+
+impl HttpConfig {
+    /// The API token: `token` from the file, else the variable named by `token_env`, else
+    /// `MPMWATCH_TOKEN`; `None` when none is set (non-GET endpoints then answer 403). `env`
+    /// looks a variable up (`std::env::var` in the service, a map in tests).
+    ///
+    /// A `token_env` naming an unset or empty variable is an error rather than "no token": the
+    /// operator meant to protect the API and should learn at start that it is not.
+    pub fn resolve_token(&self, env: impl Fn(&str) -> Option<String>) -> Result<Option<Secret>, String> {
+        if let Some(t) = &self.token {
+            return Ok(Some(t.clone()));
+        }
+        let token = match &self.token_env {
+            Some(name) => match env(name).filter(|v| !v.is_empty()) {
+                Some(v) => v,
+                None => return Err(format!("http.token_env: the environment variable {name} is not set")),
+            },
+            None => match env(TOKEN_ENV).filter(|v| !v.is_empty()) {
+                Some(v) => v,
+                None => return Ok(None),
+            },
+        };
+        if token.chars().count() < MIN_TOKEN_LEN {
+            return Err(format!("the HTTP API token must have at least {MIN_TOKEN_LEN} characters"));
+        }
+        Ok(Some(Secret(token)))
     }
 }
 
@@ -133,6 +225,10 @@ pub struct StoreConfig {
     /// How often closed samples are written, milliseconds (1..=1000): the most a crash loses.
     #[serde(default = "default_flush")]
     pub flush_interval_ms: u64,
+    /// Cap on the database size in bytes (absent: none). Past it writes fail as on a full disk:
+    /// the analyses go on and `/healthz` reports the store degraded.
+    #[serde(default)]
+    pub max_bytes: Option<u64>,
 }
 
 fn default_flush() -> u64 {
@@ -141,7 +237,7 @@ fn default_flush() -> u64 {
 
 impl Default for StoreConfig {
     fn default() -> Self {
-        Self { path: None, flush_interval_ms: default_flush() }
+        Self { path: None, flush_interval_ms: default_flush(), max_bytes: None }
     }
 }
 
@@ -292,6 +388,19 @@ fn default_clear() -> u32 {
     3
 }
 
+/// Longest window, samples: bounds the memory of a controller whatever the file says.
+pub const MAX_WINDOW: usize = 1_000_000;
+/// Largest reorder tolerance, samples.
+pub const MAX_TOLERANCE: usize = 100_000;
+/// Most surrogates per element.
+pub const MAX_SURROGATES: usize = 100_000;
+/// Longest model dead time, samples (its filter holds that many past inputs).
+pub const MAX_DELAY: usize = 100_000;
+/// Shortest and longest `every`, seconds (a timer needs a non-zero, representable period).
+pub const MIN_EVERY: f64 = 0.01;
+/// See [`MIN_EVERY`]: one year.
+pub const MAX_EVERY: f64 = 31_536_000.0;
+
 /// Characters that zenoh key expressions reserve; none may appear in a prefix, id or tag.
 const RESERVED: &[char] = &['/', '*', '$', '?', '#', ' '];
 
@@ -310,6 +419,15 @@ fn check_tags(problems: &mut Vec<String>, key: &str, tags: &[String]) {
         if !seen.insert(t) {
             problems.push(format!("{key}[{i}]: tag {t:?} is listed twice"));
         }
+    }
+}
+
+impl std::str::FromStr for Config {
+    type Err = ConfigError;
+
+    /// Parses and validates TOML text (messages name it `<string>`).
+    fn from_str(text: &str) -> Result<Self, ConfigError> {
+        Self::parse(text, "<string>")
     }
 }
 
@@ -355,11 +473,39 @@ impl Config {
         if self.http.bind.parse::<SocketAddr>().is_err() {
             p.push(format!("http.bind: {:?} is not an address:port such as 127.0.0.1:9464", self.http.bind));
         }
+        if let Some(t) = &self.http.token {
+            if t.expose().chars().count() < MIN_TOKEN_LEN {
+                p.push(format!("http.token: must have at least {MIN_TOKEN_LEN} characters"));
+            }
+            if self.http.token_env.is_some() {
+                p.push("http.token: set either token or token_env, not both".into());
+            }
+        }
+        if let Some(name) = &self.http.token_env
+            && (name.is_empty() || name.contains('='))
+        {
+            p.push(format!("http.token_env: {name:?} is not an environment variable name"));
+        }
+        if !(1..=(64 << 20)).contains(&self.http.max_body_bytes) {
+            p.push(format!("http.max_body_bytes: {} must lie in 1..=67108864", self.http.max_body_bytes));
+        }
+        if !(self.http.rate_limit_per_s.is_finite() && self.http.rate_limit_per_s >= 0.0) {
+            p.push(format!(
+                "http.rate_limit_per_s: {} must be a number ≥ 0 (0 turns the limit off)",
+                self.http.rate_limit_per_s
+            ));
+        }
+        if self.http.rate_limit_per_s > 0.0 && self.http.rate_limit_burst == 0 {
+            p.push("http.rate_limit_burst: must be at least 1 while the rate limit is on".into());
+        }
         if !(1..=1000).contains(&self.store.flush_interval_ms) {
             p.push(format!(
                 "store.flush_interval_ms: {} must lie in 1..=1000 (at most one second of samples may be lost)",
                 self.store.flush_interval_ms
             ));
+        }
+        if self.store.max_bytes.is_some_and(|b| b < 16 * 1024) {
+            p.push("store.max_bytes: must be at least 16384 (the empty schema takes a few pages)".into());
         }
         if self.controllers.is_empty() {
             p.push("controller: at least one [[controller]] table is needed".into());
@@ -420,23 +566,45 @@ impl ControllerConfig {
                     if !self.cv.contains(&ch.cv) {
                         p.push(format!("{mkey}.cv: {:?} is not one of the CV tags {:?}", ch.cv, self.cv));
                     }
+                    if ch.delay > MAX_DELAY {
+                        p.push(format!(
+                            "{mkey}.delay: {} is too long (at most {MAX_DELAY} samples)",
+                            ch.delay
+                        ));
+                        continue;
+                    }
                     if let Err(e) = channel(ch) {
                         p.push(format!("{mkey}: {e}"));
                     }
                 }
-                if p.is_empty()
-                    && let Ok(model) = self.nominal_model()
-                    && !model.is_strictly_proper()
-                {
-                    p.push(format!(
-                        "{key}.model: the model must be strictly proper (delay ≥ 1 or b[0] = 0): a residual \
-                         needs the prediction before the MV moves"
-                    ));
+                if p.is_empty() {
+                    match self.nominal_model() {
+                        Ok(model) if !model.is_strictly_proper() => p.push(format!(
+                            "{key}.model: the model must be strictly proper (delay ≥ 1 or b[0] = 0): a \
+                             residual needs the prediction before the MV moves"
+                        )),
+                        Ok(_) => {}
+                        // e.g. a channel given twice (seen while writing the config fuzz target): it used to pass
+                        // validation and stop the service at start.
+                        Err(e) => p.push(format!("{key}.model: {e}")),
+                    }
                 }
             }
         }
         if self.window < 16 {
             p.push(format!("{key}.window: {} is too short (at least 16 samples)", self.window));
+        }
+        if self.window > MAX_WINDOW {
+            p.push(format!("{key}.window: {} is too long (at most {MAX_WINDOW} samples)", self.window));
+        }
+        if self.tolerance > MAX_TOLERANCE {
+            p.push(format!(
+                "{key}.tolerance: {} is too large (at most {MAX_TOLERANCE} samples)",
+                self.tolerance
+            ));
+        }
+        if self.surrogates > MAX_SURROGATES {
+            p.push(format!("{key}.surrogates: {} is too many (at most {MAX_SURROGATES})", self.surrogates));
         }
         if self.min_samples > self.window {
             p.push(format!("{key}.min_samples: {} exceeds window {}", self.min_samples, self.window));
@@ -444,7 +612,7 @@ impl ControllerConfig {
         if self.lag_min > self.lag_max {
             p.push(format!("{key}.lag_min: {} exceeds lag_max {}", self.lag_min, self.lag_max));
         }
-        if self.min_samples < self.lag_max + 4 * (self.k + 1) {
+        if self.min_samples < self.lag_max.saturating_add(self.k.saturating_add(1).saturating_mul(4)) {
             p.push(format!(
                 "{key}.min_samples: {} is too few for lag_max {} and k {} (at least lag_max + 4(k+1))",
                 self.min_samples, self.lag_max, self.k
@@ -462,8 +630,11 @@ impl ControllerConfig {
         if !(self.sigma.is_finite() && self.sigma > 0.0) {
             p.push(format!("{key}.sigma: {} must be positive", self.sigma));
         }
-        if !(self.every.is_finite() && self.every > 0.0) {
-            p.push(format!("{key}.every: {} must be a positive number of seconds", self.every));
+        if !(self.every.is_finite() && (MIN_EVERY..=MAX_EVERY).contains(&self.every)) {
+            p.push(format!(
+                "{key}.every: {} must be a number of seconds in {MIN_EVERY}..={MAX_EVERY}",
+                self.every
+            ));
         }
         if self.raise_after == 0 {
             p.push(format!("{key}.raise_after: must be at least 1"));
@@ -566,6 +737,51 @@ surrogates = 1
     }
 
     #[test]
+    fn the_token_comes_from_the_file_a_named_variable_or_mpmwatch_token_and_never_shows() {
+        fn env(vars: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
+            let vars: Vec<(String, String)> =
+                vars.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+            move |k: &str| vars.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone())
+        }
+        let long = "0123456789abcdef0123";
+        let c = Config::parse(&format!("[http]\ntoken = \"{long}\"\n{GOOD}"), "t").unwrap();
+        assert_eq!(c.http.resolve_token(env(&[])).unwrap().unwrap().expose(), long);
+        assert!(!format!("{c:?}").contains(long), "Debug redacts the token");
+        let c = Config::parse(&format!("[http]\ntoken_env = \"API_TOKEN\"\n{GOOD}"), "t").unwrap();
+        assert_eq!(
+            c.http.resolve_token(env(&[("API_TOKEN", long), (TOKEN_ENV, "other-token-0123456789")])).unwrap(),
+            Some(Secret::new(long))
+        );
+        let e = c.http.resolve_token(env(&[])).unwrap_err();
+        assert!(e.contains("API_TOKEN"), "{e}");
+        let c = Config::parse(GOOD, "t").unwrap();
+        assert_eq!(c.http.resolve_token(env(&[])).unwrap(), None);
+        assert_eq!(c.http.resolve_token(env(&[(TOKEN_ENV, long)])).unwrap(), Some(Secret::new(long)));
+        assert!(c.http.resolve_token(env(&[(TOKEN_ENV, "short")])).is_err());
+        let Err(ConfigError::Invalid { problems, .. }) =
+            Config::parse(&format!("[http]\ntoken = \"short\"\n{GOOD}"), "t")
+        else {
+            panic!()
+        };
+        assert!(problems[0].starts_with("http.token:"), "{problems:?}");
+    }
+
+    #[test]
+    fn huge_or_degenerate_numbers_are_refused_not_allocated() {
+        let text = format!(
+            "{GOOD}window = 1000000000000\ntolerance = 9223372036854775807\nk = 9223372036854775807\nevery = 1e-300\n"
+        );
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&text, "t") else { panic!() };
+        let all = problems.join("\n");
+        for key in [".window:", ".tolerance:", ".min_samples:", ".every:"] {
+            assert!(all.contains(key), "{key} missing from\n{all}");
+        }
+        let text = format!("[http]\nmax_body_bytes = 0\nrate_limit_per_s = -1\n{GOOD}");
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&text, "t") else { panic!() };
+        assert_eq!(problems.len(), 2, "{problems:?}");
+    }
+
+    #[test]
     fn unknown_keys_are_named() {
         let Err(ConfigError::Parse { message, .. }) = Config::parse(&format!("{GOOD}windw = 3\n"), "t")
         else {
@@ -599,6 +815,9 @@ map = "square"
         let c = Config::parse(text, "t").unwrap();
         let m = c.controllers[0].nominal_model().unwrap();
         assert_eq!((m.outputs(), m.inputs()), (1, 2));
+        let twice = text.replace("mv = \"u2\"\ncv = \"y1\"", "mv = \"u1\"\ncv = \"y1\"");
+        let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&twice, "t") else { panic!() };
+        assert!(problems[0].contains("given twice"), "{problems:?}");
         let bad = text.replace("delay = 2", "delay = 0");
         let Err(ConfigError::Invalid { problems, .. }) = Config::parse(&bad, "t") else { panic!() };
         assert!(problems[0].contains("strictly proper"), "{problems:?}");

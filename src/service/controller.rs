@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::sync::Arc;
 
 use super::alarm::{AlarmEvent, Debounce, Transition};
-use super::align::{Aligner, ClosedRow, DropReason, Layout, Residuals, WindowRow};
+use super::align::{Aligner, ClosedRow, DropReason, Jump, Layout, Residuals, WindowRow};
 use super::analysis::{RunReport, RunStatus};
 use super::config::{ControllerConfig, ResidualSource};
 use super::payload::{self, Role};
@@ -28,6 +28,11 @@ pub struct IngestOutcome {
     pub dropped: Vec<(DropReason, u64)>,
     /// Why the message or some of its samples were refused, for the log.
     pub problem: Option<String>,
+    /// Sample slots skipped between the window's rows that this message closed (a gap in the
+    /// data: a publisher away, a lost message, an incomplete row).
+    pub gap_rows: u64,
+    /// Jumps of the source clock this message confirmed.
+    pub time_jumps: u64,
 }
 
 impl IngestOutcome {
@@ -62,6 +67,13 @@ pub struct Controller {
     pub dropped: HashMap<DropReason, u64>,
     /// An analysis is in flight.
     pub running: bool,
+    /// Slots missing between consecutive window rows since start (see [`IngestOutcome::gap_rows`]).
+    pub gap_rows: u64,
+    /// Confirmed jumps of the source clock since start.
+    pub time_jumps: u64,
+    /// The stored rows must be replaced, not extended, at the next flush (the clock jumped
+    /// back, so they lie in the new timeline's future).
+    pub store_reset: bool,
 }
 
 impl Controller {
@@ -105,6 +117,9 @@ impl Controller {
             ingested: 0,
             dropped: HashMap::new(),
             running: false,
+            gap_rows: 0,
+            time_jumps: 0,
+            store_reset: false,
             cfg,
         })
     }
@@ -113,6 +128,7 @@ impl Controller {
     pub fn ingest(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
         let out = self.ingest_uncounted(role, tag, bytes);
         self.ingested += out.accepted;
+        self.gap_rows += out.gap_rows;
         for (r, n) in &out.dropped {
             *self.dropped.entry(*r).or_default() += n;
         }
@@ -156,13 +172,42 @@ impl Controller {
                     }
                 }
             }
-        }
-        for row in &closed {
-            if let Some(w) = self.residuals.process(row) {
-                self.push_row(w);
+            // Rows of the old timeline are done before a jump resets what depends on it.
+            for row in closed.drain(..) {
+                if let Some(w) = self.residuals.process(&row) {
+                    if let Some(last) = self.window.last_slot()
+                        && w.slot > last + 1
+                    {
+                        out.gap_rows += (w.slot - last - 1) as u64;
+                    }
+                    self.push_row(w);
+                }
+            }
+            for jump in self.aligner.take_jumps() {
+                out.time_jumps += 1;
+                self.on_jump(jump);
             }
         }
         out
+    }
+
+    /// A confirmed jump of the source clock. Forward it is a gap and needs nothing; back, the
+    /// window's rows and the stored ones lie in the new timeline's future and are dropped.
+    fn on_jump(&mut self, jump: Jump) {
+        self.time_jumps += 1;
+        tracing::warn!(
+            controller = %self.cfg.id,
+            from_s = jump.from as f64 * self.cfg.period,
+            to_s = jump.to as f64 * self.cfg.period,
+            "the source clock jumped {}; continuing on the new timeline",
+            if jump.is_backward() { "back: the window restarts" } else { "forward: a gap" }
+        );
+        if jump.is_backward() {
+            self.window.clear();
+            self.unsaved.clear();
+            self.residuals.reset();
+            self.store_reset = true;
+        }
     }
 
     fn push_row(&mut self, w: WindowRow) {
@@ -171,6 +216,17 @@ impl Controller {
                 self.unsaved.pop_front();
             }
             self.unsaved.push_back(w);
+        }
+    }
+
+    /// Puts rows whose write failed back in front of the unsaved queue, keeping at most a
+    /// window's worth (older rows have left the window and need no saving).
+    pub fn requeue_unsaved(&mut self, rows: Vec<WindowRow>) {
+        for r in rows.into_iter().rev() {
+            if self.unsaved.len() >= self.cfg.window {
+                break;
+            }
+            self.unsaved.push_front(r);
         }
     }
 

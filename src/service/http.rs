@@ -1,16 +1,21 @@
 //! The HTTP API (DESIGN.md §4.4) with axum: thin handlers over [`Shared`]. Every error is JSON
 //! `{"error": "..."}` with a status code that says what went wrong: 400 for a bad request, 404
-//! for an unknown controller, channel or path, 503 while no analysis has produced the answer.
+//! for an unknown controller, channel or path, 503 while no analysis has produced the answer,
+//! and from the guards ([`super::guard`]) 401/403 without a valid token on a non-GET request,
+//! 413 for a body over the limit, 429 past the rate limit.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use axum::Json;
 use axum::Router;
-use axum::extract::{Path, Query, State};
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{DefaultBodyLimit, Path, Query, State};
 use axum::http::{StatusCode, header};
+use axum::middleware::from_fn_with_state;
 use axum::response::{Html, IntoResponse, Response};
-use axum::routing::get;
+use axum::routing::{get, post};
 use serde::Serialize;
 use serde_json::json;
 use tokio::sync::watch;
@@ -18,12 +23,20 @@ use tokio::task::JoinHandle;
 
 use super::Shared;
 use super::analysis::{self, RunStatus};
-use super::page;
+use super::guard::{self, Guard};
+use super::{page, scheduler};
 
 type AppState = Arc<Shared>;
 
 /// A JSON error with its status code.
 pub struct ApiError(StatusCode, String);
+
+impl ApiError {
+    /// An error answer.
+    pub fn new(status: StatusCode, message: String) -> Self {
+        Self(status, message)
+    }
+}
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
@@ -35,8 +48,8 @@ fn not_found(what: String) -> ApiError {
     ApiError(StatusCode::NOT_FOUND, what)
 }
 
-/// The router.
-pub fn router(shared: Arc<Shared>) -> Router {
+/// The router with its guards: rate limit (outermost), body size, then the token for non-GET.
+pub fn router(shared: Arc<Shared>, guard: Arc<Guard>) -> Router {
     Router::new()
         .route("/", get(index))
         .route("/healthz", get(healthz))
@@ -46,18 +59,24 @@ pub fn router(shared: Arc<Shared>) -> Router {
         .route("/api/v1/controllers/{id}/matrix", get(matrix))
         .route("/api/v1/controllers/{id}/alarms", get(alarms))
         .route("/api/v1/controllers/{id}/profile", get(profile))
+        .route("/api/v1/controllers/{id}/run", post(run_now))
         .fallback(|| async { not_found("no such path; see GET /api/v1/controllers".into()) })
         .with_state(shared)
+        .layer(DefaultBodyLimit::max(guard.max_body()))
+        .layer(from_fn_with_state(guard.clone(), guard::require_token))
+        .layer(from_fn_with_state(guard.clone(), guard::body_limit))
+        .layer(from_fn_with_state(guard, guard::rate_limit))
 }
 
 /// Serves until `stop`.
 pub fn spawn(
     shared: Arc<Shared>,
+    guard: Arc<Guard>,
     listener: tokio::net::TcpListener,
     mut stop: watch::Receiver<bool>,
 ) -> JoinHandle<()> {
     tokio::spawn(async move {
-        let app = router(shared);
+        let app = router(shared, guard);
         let res = axum::serve(listener, app)
             .with_graceful_shutdown(async move {
                 let _ = stop.changed().await;
@@ -73,12 +92,37 @@ async fn index() -> Html<&'static str> {
     Html(page::INDEX)
 }
 
+/// Liveness and the store's health: `status` is `ok`, or `degraded` while the store fails (the
+/// analyses go on; only persistence is lost). Always 200: the process is alive and serving.
 async fn healthz(State(s): State<AppState>) -> Json<serde_json::Value> {
+    let store = s.store_health.snapshot(s.store.is_some());
+    let degraded = store.get("ok").and_then(|v| v.as_bool()) == Some(false);
     Json(json!({
-        "status": "ok",
+        "status": if degraded { "degraded" } else { "ok" },
         "uptime_s": s.started.elapsed().as_secs_f64(),
         "controllers": s.controllers.len(),
+        "store": store,
     }))
+}
+
+/// `POST /api/v1/controllers/{id}/run`: analyses the controller now instead of waiting for its
+/// schedule, and answers the run's report (409 while a run is in flight). The body is ignored
+/// but bounded like any other.
+async fn run_now(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    if let Err(e) = body {
+        return Err(ApiError(e.status(), e.body_text()));
+    }
+    if !s.controllers.contains_key(&id) {
+        return Err(unknown(&id));
+    }
+    match scheduler::run_once(&s, &id).await {
+        Some(r) => Ok(Json(&*r).into_response()),
+        None => Err(ApiError(StatusCode::CONFLICT, format!("an analysis of {id:?} is already running"))),
+    }
 }
 
 async fn metrics(State(s): State<AppState>) -> Response {
@@ -116,6 +160,10 @@ pub struct ControllerStatus {
     pub ingested: u64,
     /// Drops by reason.
     pub dropped: BTreeMap<String, u64>,
+    /// Slots missing between consecutive window rows (gaps in the data).
+    pub gap_rows: u64,
+    /// Confirmed jumps of the source clock.
+    pub time_jumps: u64,
     /// Status of the last run.
     pub last_run_status: Option<RunStatus>,
     /// Its time.
@@ -147,6 +195,8 @@ fn status(s: &Shared, id: &str) -> Option<ControllerStatus> {
             .iter()
             .map(|r| (r.as_str().to_string(), c.dropped.get(r).copied().unwrap_or(0)))
             .collect(),
+        gap_rows: c.gap_rows,
+        time_jumps: c.time_jumps,
         last_run_status: latest.as_ref().map(|r| r.status),
         last_run_time: latest.as_ref().map(|r| r.time.clone()),
         last_run_duration_s: latest.as_ref().map(|r| r.duration_s),

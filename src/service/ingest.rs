@@ -55,6 +55,8 @@ pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
     drop(ctl);
     let m = &shared.metrics;
     m.ingested.get_or_create(&labels).inc_by(outcome.accepted);
+    m.gap_rows.get_or_create(&labels).inc_by(outcome.gap_rows);
+    m.time_jumps.get_or_create(&labels).inc_by(outcome.time_jumps);
     for (r, n) in &outcome.dropped {
         m.dropped
             .get_or_create(&DropLabels { controller: id.to_string(), reason: r.as_str().into() })

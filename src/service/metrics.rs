@@ -60,6 +60,13 @@ pub struct RunLabels {
     pub status: String,
 }
 
+/// Labels of a store error counter.
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+pub struct StoreLabels {
+    /// `flush` (window rows) or `alarm` (alarm history).
+    pub op: String,
+}
+
 type GaugeF = Gauge<f64, AtomicU64>;
 
 /// Every metric the service exports.
@@ -91,6 +98,15 @@ pub struct Metrics {
     pub runs: Family<RunLabels, Counter>,
     /// `mpm_active_alarms`.
     pub active_alarms: Family<ControllerLabels, Gauge>,
+    /// `mpm_gap_rows_total`: sample slots missing between window rows.
+    pub gap_rows: Family<ControllerLabels, Counter>,
+    /// `mpm_time_jumps_total`: confirmed jumps of the source clock.
+    pub time_jumps: Family<ControllerLabels, Counter>,
+    /// `mpm_store_errors_total` by operation: failed writes to the store.
+    pub store_errors: Family<StoreLabels, Counter>,
+    /// `mpm_store_ok`: 1 while the store's last write succeeded (or there is no store), 0 while
+    /// it fails.
+    pub store_ok: Gauge,
 }
 
 impl Default for Metrics {
@@ -117,6 +133,10 @@ impl Metrics {
             run_time: Family::default(),
             runs: Family::default(),
             active_alarms: Family::default(),
+            gap_rows: Family::default(),
+            time_jumps: Family::default(),
+            store_errors: Family::default(),
+            store_ok: Gauge::default(),
             registry: Registry::default(),
         };
         registry.register(
@@ -164,6 +184,22 @@ impl Metrics {
         );
         registry.register("mpm_runs", "Analyses by status", m.runs.clone());
         registry.register("mpm_active_alarms", "Channels whose alarm is raised", m.active_alarms.clone());
+        registry.register("mpm_gap_rows", "Sample slots missing between window rows", m.gap_rows.clone());
+        registry.register("mpm_time_jumps", "Confirmed jumps of the source clock", m.time_jumps.clone());
+        registry.register(
+            "mpm_store_errors",
+            "Failed writes to the store, by operation",
+            m.store_errors.clone(),
+        );
+        registry.register(
+            "mpm_store_ok",
+            "1 while the store's last write succeeded (or no store is configured), 0 while it fails",
+            m.store_ok.clone(),
+        );
+        m.store_ok.set(1);
+        for op in ["flush", "alarm"] {
+            let _ = m.store_errors.get_or_create(&StoreLabels { op: op.into() });
+        }
         Self { registry, ..m }
     }
 
@@ -177,6 +213,8 @@ impl Metrics {
                 .get_or_create(&DropLabels { controller: controller.to_string(), reason: r.as_str().into() });
         }
         let _ = self.active_alarms.get_or_create(&c);
+        let _ = self.gap_rows.get_or_create(&c);
+        let _ = self.time_jumps.get_or_create(&c);
         let _ = self.window_fill.get_or_create(&c);
     }
 

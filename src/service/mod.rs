@@ -10,6 +10,7 @@
 //! * [`controller`]: one controller's state, behind a mutex.
 //! * [`store`]: SQLite persistence of windows and alarms.
 //! * [`metrics`], [`http`], [`page`]: Prometheus text, the HTTP API (DESIGN.md §4.4), the status page.
+//! * [`guard`]: the HTTP API's bearer token, body size and rate limits.
 //! * [`ingest`], [`scheduler`]: the async tasks (zenoh subscription, queryable, periodic runs).
 //! * [`demo`]: the simulated plant of `mpmwatch demo`.
 //!
@@ -21,6 +22,7 @@ pub mod analysis;
 pub mod config;
 pub mod controller;
 pub mod demo;
+pub mod guard;
 pub mod http;
 pub mod ingest;
 pub mod metrics;
@@ -41,7 +43,7 @@ use tokio::task::JoinHandle;
 use self::config::{Config, ZenohConfig};
 use self::controller::Controller;
 use self::metrics::Metrics;
-use self::store::Store;
+use self::store::{Store, StoreHealth};
 
 /// Alarm events kept per controller on restore.
 const RESTORE_HISTORY: usize = 500;
@@ -63,6 +65,9 @@ pub enum ServiceError {
         /// Error.
         source: std::io::Error,
     },
+    /// A setting that can only be checked at start (e.g. an environment variable it names).
+    #[error("config: {0}")]
+    Config(String),
     /// A controller could not be built.
     #[error("controller {id}: {message}")]
     Controller {
@@ -83,6 +88,8 @@ pub struct Shared {
     pub metrics: Metrics,
     /// The store, when configured.
     pub store: Option<Arc<Store>>,
+    /// Whether the store's writes succeed (shown by `/healthz`).
+    pub store_health: StoreHealth,
     /// The zenoh session.
     pub session: zenoh::Session,
     /// Start time.
@@ -142,12 +149,27 @@ impl Service {
     /// Opens the store and restores the windows, opens the zenoh session, starts ingest,
     /// queryables, schedulers, the store flush and the HTTP server.
     pub async fn start(config: Config) -> Result<Self, ServiceError> {
+        let token =
+            config.http.resolve_token(|name| std::env::var(name).ok()).map_err(ServiceError::Config)?;
+        if token.is_none() {
+            tracing::info!(
+                "no HTTP API token configured (http.token_env or {}): non-GET endpoints answer 403",
+                config::TOKEN_ENV
+            );
+        }
+        let guard = Arc::new(guard::Guard::new(&config.http, token));
         let store = match &config.store.path {
             Some(p) => {
-                let p = p.clone();
-                let s = tokio::task::spawn_blocking(move || Store::open(&p))
-                    .await
-                    .map_err(|e| ServiceError::Zenoh(e.to_string()))??;
+                let (p, cap) = (p.clone(), config.store.max_bytes);
+                let s = tokio::task::spawn_blocking(move || {
+                    let s = Store::open(&p)?;
+                    if let Some(b) = cap {
+                        s.limit_size(b)?;
+                    }
+                    Ok::<_, store::StoreError>(s)
+                })
+                .await
+                .map_err(|e| ServiceError::Config(format!("store task: {e}")))??;
                 Some(Arc::new(s))
             }
             None => None,
@@ -174,6 +196,7 @@ impl Service {
             controllers,
             metrics: Metrics::new(),
             store,
+            store_health: StoreHealth::default(),
             session,
             started: Instant::now(),
         });
@@ -194,7 +217,7 @@ impl Service {
             .await
             .map_err(|source| ServiceError::Bind { addr: bind.clone(), source })?;
         let http_addr = listener.local_addr().map_err(|source| ServiceError::Bind { addr: bind, source })?;
-        tasks.push(http::spawn(shared.clone(), listener, rx));
+        tasks.push(http::spawn(shared.clone(), guard, listener, rx));
         tracing::info!(%http_addr, controllers = shared.controllers.len(), "mpmwatch serving");
         Ok(Self { shared, http_addr, shutdown, tasks })
     }

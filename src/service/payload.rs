@@ -61,6 +61,13 @@ pub fn parse_key<'a>(prefix: &str, key: &'a str) -> Option<InputKey<'a>> {
     Some(InputKey { controller, role: Role::parse(role)?, tag })
 }
 
+/// Largest payload decoded, bytes: a message over it is refused before parsing, so one
+/// publisher cannot make the service build a huge JSON tree (zenoh itself accepts up to 1 GiB).
+pub const MAX_PAYLOAD_BYTES: usize = 16 << 20;
+
+/// Most samples in one batch.
+pub const MAX_BATCH: usize = 100_000;
+
 /// A payload that cannot be decoded at all.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PayloadError {
@@ -78,6 +85,9 @@ pub enum PayloadError {
         /// Values.
         v: usize,
     },
+    /// Over [`MAX_PAYLOAD_BYTES`] or [`MAX_BATCH`].
+    #[error("payload too large: {0}")]
+    TooLarge(String),
     /// A time that is neither a finite number of seconds nor RFC 3339.
     #[error("bad time {0}: seconds or RFC 3339 expected")]
     Time(String),
@@ -95,6 +105,9 @@ pub struct Sample {
 /// Decodes a single or batched payload. A bad time or value shape rejects the whole message, so
 /// a batch never half-applies.
 pub fn decode(bytes: &[u8]) -> Result<Vec<Sample>, PayloadError> {
+    if bytes.len() > MAX_PAYLOAD_BYTES {
+        return Err(PayloadError::TooLarge(format!("{} bytes, at most {MAX_PAYLOAD_BYTES}", bytes.len())));
+    }
     let json: Value = serde_json::from_slice(bytes).map_err(|e| PayloadError::NotJson(e.to_string()))?;
     let obj = json.as_object().ok_or_else(|| PayloadError::Shape("not an object".into()))?;
     let t = obj.get("t").ok_or_else(|| PayloadError::Shape("no \"t\"".into()))?;
@@ -103,6 +116,9 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<Sample>, PayloadError> {
         (Value::Array(ts), Value::Array(vs)) => {
             if ts.len() != vs.len() {
                 return Err(PayloadError::Lengths { t: ts.len(), v: vs.len() });
+            }
+            if ts.len() > MAX_BATCH {
+                return Err(PayloadError::TooLarge(format!("{} samples, at most {MAX_BATCH}", ts.len())));
             }
             ts.iter().zip(vs).map(|(t, v)| Ok(Sample { t: time(t)?, v: value(v)? })).collect()
         }
@@ -191,6 +207,15 @@ mod tests {
         assert!(matches!(decode(br#"{"t": "yesterday", "v": 1}"#), Err(PayloadError::Time(_))));
         assert!(matches!(decode(br#"{"t": [1], "v": 1}"#), Err(PayloadError::Shape(_))));
         assert!(matches!(decode(br#"{"t": 1, "v": {}}"#), Err(PayloadError::Shape(_))));
+    }
+
+    #[test]
+    fn oversized_payloads_and_batches_are_refused() {
+        let big = vec![b' '; MAX_PAYLOAD_BYTES + 1];
+        assert!(matches!(decode(&big), Err(PayloadError::TooLarge(_))));
+        let n = MAX_BATCH + 1;
+        let batch = encode_batch(&vec![1.0; n], &vec![0.0; n]);
+        assert!(matches!(decode(batch.as_bytes()), Err(PayloadError::TooLarge(_))));
     }
 
     #[test]

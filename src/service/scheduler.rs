@@ -11,7 +11,7 @@ use tokio::time::MissedTickBehavior;
 
 use super::alarm::AlarmEvent;
 use super::analysis::{self, RunReport, RunStatus};
-use super::metrics::{ChannelLabels, ControllerLabels, RunLabels, VerdictLabels};
+use super::metrics::{ChannelLabels, ControllerLabels, RunLabels, StoreLabels, VerdictLabels};
 use super::{Shared, now_rfc3339};
 
 /// Runs controller `id`'s analyses every `every` seconds until `stop`.
@@ -140,10 +140,30 @@ async fn publish(shared: &Arc<Shared>, id: &str, report: &RunReport, events: &[A
         let events = events.to_vec();
         let res =
             tokio::task::spawn_blocking(move || events.iter().try_for_each(|e| store.append_alarm(e))).await;
-        if let Ok(Err(e)) = res {
-            tracing::warn!("alarm history not stored: {e}");
+        match res {
+            Ok(Ok(())) => store_ok(shared),
+            Ok(Err(e)) => store_failed(shared, "alarm", format!("alarm history not stored: {e}")),
+            Err(e) => store_failed(shared, "alarm", format!("alarm store task failed: {e}")),
         }
     }
+}
+
+/// Records a successful store write (health and metric).
+fn store_ok(shared: &Shared) {
+    shared.store_health.record_ok(now_rfc3339());
+    shared.metrics.store_ok.set(1);
+}
+
+/// Records a failed store write: logged, counted, and shown by `/healthz` until a write succeeds.
+fn store_failed(shared: &Shared, op: &str, message: String) {
+    if !shared.store_health.failing() {
+        tracing::error!(op, "store write failed, continuing without persistence: {message}");
+    } else {
+        tracing::debug!(op, "store write failed again: {message}");
+    }
+    shared.store_health.record_error(message, now_rfc3339());
+    shared.metrics.store_errors.get_or_create(&StoreLabels { op: op.into() }).inc();
+    shared.metrics.store_ok.set(0);
 }
 
 /// Writes every controller's unsaved rows every `flush_interval_ms`.
@@ -161,25 +181,39 @@ pub fn spawn_flush(shared: Arc<Shared>, mut stop: watch::Receiver<bool>) -> Join
     })
 }
 
-/// Writes the unsaved rows of every controller and trims rows that left the window.
+/// Writes the unsaved rows of every controller and trims rows that left the window. Rows of a
+/// failed write go back to the unsaved queue (still bounded by the window length), so a store
+/// that recovers, e.g. once disk space is freed, catches up.
 pub async fn flush(shared: &Arc<Shared>) {
     let Some(store) = shared.store.clone() else { return };
     for id in shared.controllers.keys() {
-        let (rows, keep_from) = {
+        let (rows, keep_from, replace) = {
             let Some(mut ctl) = shared.lock(id) else { continue };
-            if ctl.unsaved.is_empty() {
+            if ctl.unsaved.is_empty() && !ctl.store_reset {
                 continue;
             }
             let rows: Vec<_> = ctl.unsaved.drain(..).collect();
             let keep = ctl.window.rows().next().map(|r| r.slot);
-            (rows, keep)
+            (rows, keep, std::mem::take(&mut ctl.store_reset))
         };
         let (s, id2) = (store.clone(), id.clone());
-        let res = tokio::task::spawn_blocking(move || s.save_rows(&id2, &rows, keep_from)).await;
-        match res {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => tracing::warn!(controller = %id, "flush failed: {e}"),
-            Err(e) => tracing::warn!(controller = %id, "flush task failed: {e}"),
+        let rows = Arc::new(rows);
+        let r2 = rows.clone();
+        let res = tokio::task::spawn_blocking(move || s.save_rows(&id2, &r2, keep_from, replace)).await;
+        let failure = match res {
+            Ok(Ok(())) => None,
+            Ok(Err(e)) => Some(format!("flush of {id} failed: {e}")),
+            Err(e) => Some(format!("flush task of {id} failed: {e}")),
+        };
+        match failure {
+            None => store_ok(shared),
+            Some(message) => {
+                store_failed(shared, "flush", message);
+                if let Some(mut ctl) = shared.lock(id) {
+                    ctl.requeue_unsaved(Arc::try_unwrap(rows).unwrap_or_else(|a| (*a).clone()));
+                    ctl.store_reset |= replace;
+                }
+            }
         }
     }
 }

@@ -23,6 +23,63 @@ pub enum StoreError {
     Decode(#[from] serde_json::Error),
 }
 
+/// What the service knows about the store's health: whether its last write succeeded, and the
+/// last error. `/healthz` shows it and reports `degraded` while a write fails (a full disk, a
+/// file that became unwritable, the size cap reached); the analyses go on meanwhile.
+#[derive(Debug, Default)]
+pub struct StoreHealth {
+    state: Mutex<HealthState>,
+}
+
+#[derive(Debug, Default)]
+struct HealthState {
+    failing: bool,
+    errors: u64,
+    last_error: Option<String>,
+    last_error_time: Option<String>,
+    last_ok_time: Option<String>,
+}
+
+impl StoreHealth {
+    fn state(&self) -> std::sync::MutexGuard<'_, HealthState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// A write succeeded at `time`: the store is healthy again.
+    pub fn record_ok(&self, time: String) {
+        let mut s = self.state();
+        s.failing = false;
+        s.last_ok_time = Some(time);
+    }
+
+    /// A write failed at `time`.
+    pub fn record_error(&self, error: String, time: String) {
+        let mut s = self.state();
+        s.failing = true;
+        s.errors += 1;
+        s.last_error = Some(error);
+        s.last_error_time = Some(time);
+    }
+
+    /// Whether the last write failed.
+    pub fn failing(&self) -> bool {
+        self.state().failing
+    }
+
+    /// The `store` object of `/healthz`.
+    pub fn snapshot(&self, configured: bool) -> serde_json::Value {
+        let s = self.state();
+        serde_json::json!({
+            "configured": configured,
+            "ok": !s.failing,
+            "errors": s.errors,
+            "error": s.last_error,
+            "last_error_time": s.last_error_time,
+            "last_ok_time": s.last_ok_time,
+        })
+    }
+}
+
 /// The SQLite store.
 pub struct Store {
     conn: Mutex<Connection>,
@@ -64,22 +121,37 @@ impl Store {
         Ok(Self { conn: Mutex::new(conn) })
     }
 
+    /// Caps the database at about `max_bytes` (SQLite's `max_page_count`): past it every write
+    /// fails with "database or disk is full", exactly as on a full disk. Returns the page cap.
+    pub fn limit_size(&self, max_bytes: u64) -> Result<u64, StoreError> {
+        let conn = self.conn();
+        let page: u64 = conn.pragma_query_value(None, "page_size", |r| r.get(0))?;
+        let pages = (max_bytes / page.max(1)).max(1);
+        let set: u64 = conn.pragma_update_and_check(None, "max_page_count", pages, |r| r.get(0))?;
+        Ok(set)
+    }
+
     fn conn(&self) -> std::sync::MutexGuard<'_, Connection> {
         // A panic while holding the lock cannot leave SQLite inconsistent (transactions roll
         // back), so a poisoned lock is still usable.
         self.conn.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Writes rows and forgets rows of `controller` older than `keep_from` slot, in one transaction.
+    /// Writes rows and forgets rows of `controller` older than `keep_from` slot, in one
+    /// transaction; with `replace`, forgets all its stored rows first.
     pub fn save_rows(
         &self,
         controller: &str,
         rows: &[WindowRow],
         keep_from: Option<i64>,
+        replace: bool,
     ) -> Result<(), StoreError> {
         let mut conn = self.conn();
         let tx = conn.transaction()?;
         {
+            if replace {
+                tx.execute("DELETE FROM samples WHERE controller = ?1", params![controller])?;
+            }
             let mut ins = tx.prepare_cached(
                 "INSERT OR REPLACE INTO samples (controller, slot, mv, dither, cv, residual) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
             )?;
@@ -208,8 +280,8 @@ mod tests {
         let _ = std::fs::remove_file(&path);
         {
             let s = Store::open(&path).unwrap();
-            s.save_rows("c1", &(0..10).map(row).collect::<Vec<_>>(), None).unwrap();
-            s.save_rows("c1", &(10..12).map(row).collect::<Vec<_>>(), Some(4)).unwrap();
+            s.save_rows("c1", &(0..10).map(row).collect::<Vec<_>>(), None, false).unwrap();
+            s.save_rows("c1", &(10..12).map(row).collect::<Vec<_>>(), Some(4), false).unwrap();
             s.append_alarm(&event(Transition::Raise)).unwrap();
         }
         let s = Store::open(&path).unwrap();

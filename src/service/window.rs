@@ -38,7 +38,8 @@ pub struct Insufficient {
 impl Window {
     /// An empty window of `cap` rows.
     pub fn new(cap: usize) -> Self {
-        Self { cap, rows: VecDeque::with_capacity(cap) }
+        // Grows as rows come: a long window of a quiet controller costs nothing up front.
+        Self { cap, rows: VecDeque::with_capacity(cap.min(4096)) }
     }
 
     /// Appends a row, evicting the oldest when full. A row not after the last one is refused
@@ -52,6 +53,11 @@ impl Window {
         }
         self.rows.push_back(row);
         true
+    }
+
+    /// Drops every row (after the source clock jumped back: the rows lie in its future).
+    pub fn clear(&mut self) {
+        self.rows.clear();
     }
 
     /// Rows held.
