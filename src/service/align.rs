@@ -29,11 +29,14 @@ pub enum DropReason {
     /// Stamped more than a day after the wall clock: a bogus time that would otherwise close
     /// every open row and make all later samples look out of order.
     Future,
+    /// The controller's ingest queue was full (overload); counted once per message, as it was
+    /// never decoded.
+    QueueFull,
 }
 
 impl DropReason {
     /// Every reason, for metrics that must show zeros too.
-    pub const ALL: [DropReason; 7] = [
+    pub const ALL: [DropReason; 8] = [
         Self::BadPayload,
         Self::UnknownTag,
         Self::NonFinite,
@@ -41,6 +44,7 @@ impl DropReason {
         Self::OutOfOrder,
         Self::Late,
         Self::Future,
+        Self::QueueFull,
     ];
 
     /// The metric label.
@@ -53,6 +57,7 @@ impl DropReason {
             Self::OutOfOrder => "out_of_order",
             Self::Late => "late",
             Self::Future => "future",
+            Self::QueueFull => "queue_full",
         }
     }
 }

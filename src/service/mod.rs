@@ -12,6 +12,7 @@
 //! * [`metrics`], [`http`], [`page`]: Prometheus text, the HTTP API (DESIGN.md §4.4), the status page.
 //! * [`ingest`], [`scheduler`]: the async tasks (zenoh subscription, queryable, periodic runs).
 //! * [`demo`]: the simulated plant of `mpmwatch demo`.
+//! * [`loadgen`]: synthetic controllers publishing over zenoh (`mpmwatch loadgen`).
 //!
 //! Only the last group and [`Service::start`] touch tokio and zenoh.
 
@@ -23,6 +24,7 @@ pub mod controller;
 pub mod demo;
 pub mod http;
 pub mod ingest;
+pub mod loadgen;
 pub mod metrics;
 pub mod page;
 pub mod payload;
