@@ -99,6 +99,10 @@ pub struct Args {
     /// Seconds to wait for every key to have a subscriber before publishing.
     #[arg(long, default_value_t = 10.0)]
     wait: f64,
+    /// Seconds to keep the session open after the last put: closing it at once would discard
+    /// messages still in zenoh's transmit queue (sent, never delivered).
+    #[arg(long, default_value_t = 2.0)]
+    linger: f64,
     /// Print the matching [[controller]] tables and exit.
     #[arg(long)]
     print_config: bool,
@@ -114,6 +118,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.duration.is_finite() && args.duration > 0.0, "--duration must be positive");
     anyhow::ensure!(args.wait.is_finite() && args.wait >= 0.0, "--wait must be ≥ 0");
+    anyhow::ensure!(args.linger.is_finite() && args.linger >= 0.0, "--linger must be ≥ 0");
     anyhow::ensure!(["peer", "client"].contains(&args.mode.as_str()), "--mode must be peer or client");
     let opts = LoadgenOptions {
         prefix: args.prefix,
@@ -150,6 +155,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let report = rt.block_on(async {
         let session = zenoh::open(zc).await.map_err(|e| anyhow::anyhow!("zenoh: {e}"))?;
         let r = loadgen::run(&session, &opts).await;
+        tokio::time::sleep(Duration::from_secs_f64(args.linger)).await;
         let _ = session.close().await;
         r.map_err(anyhow::Error::from)
     })?;

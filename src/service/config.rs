@@ -164,11 +164,11 @@ pub struct IngestConfig {
 }
 
 fn default_queue_messages() -> usize {
-    1024
+    256
 }
 
 fn default_queue_bytes() -> usize {
-    8 << 20
+    2 << 20
 }
 
 impl Default for IngestConfig {
