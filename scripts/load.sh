@@ -63,9 +63,9 @@ acc() {
   awk -v b="$BATCH" '
     /^mpm_samples_ingested_total/ {i += $NF}
     /^mpm_samples_dropped_total/ { if ($0 ~ /queue_full/) q += $NF; else d += $NF }
-    END {printf "%d %d %d %d\n", i, d, q, i + d + q * b}' "$OUT/metrics.txt"
+    END {printf "%.0f %.0f %.0f %.0f\n", i, d, q, i + d + q * b}' "$OUT/metrics.txt"
 }
-for _ in $(seq 240); do
+for _ in $(seq 600); do
   read -r ING DROP QF TOTAL < <(acc)
   [ "$TOTAL" -ge "$SENT" ] && break
   sleep 0.5

@@ -14,6 +14,12 @@ use super::analysis::{self, RunReport, RunStatus};
 use super::metrics::{ChannelLabels, ControllerLabels, RunLabels, VerdictLabels};
 use super::{Shared, now_rfc3339};
 
+/// One analysis at a time per process. Each run already uses every core (rayon), so running
+/// several at once only makes all of them finish late together (measured: 50 concurrent 3×3
+/// runs each took 90–120 s instead of a few seconds); one at a time, the runs that fit in the
+/// period finish on time and an overloaded instance shows it in `mpm_runs_late_total`.
+static ANALYSIS_SLOT: tokio::sync::Semaphore = tokio::sync::Semaphore::const_new(1);
+
 /// Runs controller `id`'s analyses every `every` seconds until `stop`.
 ///
 /// The schedule is a fixed grid `start + phase + k·every`. `phase` spreads the controllers of
@@ -36,8 +42,14 @@ pub fn spawn(shared: Arc<Shared>, id: String, mut stop: watch::Receiver<bool>) -
                 _ = tokio::time::sleep_until(due.into()) => {}
                 _ = stop.changed() => break,
             }
+            let slot = tokio::select! {
+                p = ANALYSIS_SLOT.acquire() => p.ok(),
+                _ = stop.changed() => break,
+            };
+            // Lateness includes the wait for the analysis slot.
             m.run_lateness.get_or_create(&labels).set(due.elapsed().as_secs_f64());
             run_once(&shared, &id).await;
+            drop(slot);
             let (next, missed) = next_due(due, every, Instant::now());
             if missed > 0 {
                 m.runs_late.get_or_create(&labels).inc();
