@@ -138,6 +138,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         block: !args.drop,
         wait_subscribers: Duration::from_secs_f64(args.wait),
     };
+    opts.check()?;
     if args.print_config {
         print!("{}", opts.controller_toml(&args.extra.replace("\\n", "\n")));
         return Ok(());

@@ -176,7 +176,8 @@ impl LoadgenOptions {
         s
     }
 
-    fn check(&self) -> Result<(), LoadgenError> {
+    /// Refuses options that cannot work, before any session is opened.
+    pub fn check(&self) -> Result<(), LoadgenError> {
         let bad = |m: &str| Err(LoadgenError::Options(m.into()));
         if self.controllers == 0 || self.mvs == 0 || self.cvs == 0 {
             return bad("controllers, MVs and CVs must be at least 1");
