@@ -159,6 +159,7 @@ pub struct IngestConfig {
     #[serde(default = "default_queue_messages")]
     pub queue_messages: usize,
     /// Most payload bytes waiting per controller (at least 1024): the memory bound of a queue.
+    /// A single message larger than this is always dropped (`queue_full`).
     #[serde(default = "default_queue_bytes")]
     pub queue_bytes: usize,
 }
