@@ -71,6 +71,15 @@ enum Verb {
     ///
     /// Example: mpmwatch serve --config config/examples/continuous2x3.toml
     Serve(cmd::serve::Args),
+    /// Load generator: synthetic controllers publishing over zenoh into a monitor.
+    ///
+    /// N controllers × (MVs, PRBS dithers, CVs, predictions) at a rate, one sample or a batch
+    /// per message, for a duration, on the monitor's keys and payloads; prints the samples/s it
+    /// achieved (--json for one object). The residuals carry a planted mismatch on ud1→y1, so
+    /// the monitor's analyses have real work. `loadgen --help` explains rate and accounting.
+    ///
+    /// Example: mpmwatch loadgen --connect tcp/127.0.0.1:7447 --controllers 20 --rate 1000 --batch 100
+    Loadgen(cmd::loadgen::Args),
     /// One-command demo: a simulated MPC loop publishing into the monitor, and the status page.
     ///
     /// Starts an embedded zenoh peer on loopback, the monitor with its HTTP page, and the
@@ -118,6 +127,7 @@ fn main() -> anyhow::Result<()> {
         Verb::Simulate(args) => cmd::simulate::run(args),
         Verb::Serve(args) => cmd::serve::run(args),
         Verb::Demo(args) => cmd::demo::run(args),
+        Verb::Loadgen(args) => cmd::loadgen::run(args),
         Verb::Diagnose(args) => cmd::diagnose::run(args),
         Verb::Casebook(args) => cmd::casebook::run(args),
     }

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod casebook;
 pub mod demo;
 pub mod diagnose;
+pub mod loadgen;
 pub mod mi;
 pub mod reproduce;
 pub mod serve;

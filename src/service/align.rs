@@ -41,11 +41,14 @@ pub enum DropReason {
     /// Far ahead of or behind the current timeline: held against a possible jump of the source
     /// clock until the jump is confirmed or cancelled (see the module doc).
     TimeJump,
+    /// The controller's ingest queue was full (overload); counted once per message, as it was
+    /// never decoded.
+    QueueFull,
 }
 
 impl DropReason {
     /// Every reason, for metrics that must show zeros too.
-    pub const ALL: [DropReason; 8] = [
+    pub const ALL: [DropReason; 9] = [
         Self::BadPayload,
         Self::UnknownTag,
         Self::NonFinite,
@@ -54,6 +57,7 @@ impl DropReason {
         Self::Late,
         Self::Future,
         Self::TimeJump,
+        Self::QueueFull,
     ];
 
     /// The metric label.
@@ -67,6 +71,7 @@ impl DropReason {
             Self::Late => "late",
             Self::Future => "future",
             Self::TimeJump => "time_jump",
+            Self::QueueFull => "queue_full",
         }
     }
 }

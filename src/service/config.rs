@@ -55,6 +55,9 @@ pub struct Config {
     /// The SQLite store.
     #[serde(default)]
     pub store: StoreConfig,
+    /// The bounded queue between zenoh and each controller's ingest task.
+    #[serde(default)]
+    pub ingest: IngestConfig,
     /// The monitored controllers (`[[controller]]` tables).
     #[serde(default, rename = "controller")]
     pub controllers: Vec<ControllerConfig>,
@@ -238,6 +241,36 @@ fn default_flush() -> u64 {
 impl Default for StoreConfig {
     fn default() -> Self {
         Self { path: None, flush_interval_ms: default_flush(), max_bytes: None }
+    }
+}
+
+/// Ingest queue settings. Each controller has one queue between zenoh's receive thread and its
+/// ingest task; a message that does not fit is dropped and counted as `queue_full`, so that
+/// overload costs samples, never unbounded memory, and zenoh's receive thread never blocks
+/// (a blocked receiver makes routers and publishers drop silently instead).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IngestConfig {
+    /// Most messages waiting per controller (1..=1_000_000).
+    #[serde(default = "default_queue_messages")]
+    pub queue_messages: usize,
+    /// Most payload bytes waiting per controller (at least 1024): the memory bound of a queue.
+    /// A single message larger than this is always dropped (`queue_full`).
+    #[serde(default = "default_queue_bytes")]
+    pub queue_bytes: usize,
+}
+
+fn default_queue_messages() -> usize {
+    256
+}
+
+fn default_queue_bytes() -> usize {
+    2 << 20
+}
+
+impl Default for IngestConfig {
+    fn default() -> Self {
+        Self { queue_messages: default_queue_messages(), queue_bytes: default_queue_bytes() }
     }
 }
 
@@ -506,6 +539,12 @@ impl Config {
         }
         if self.store.max_bytes.is_some_and(|b| b < 16 * 1024) {
             p.push("store.max_bytes: must be at least 16384 (the empty schema takes a few pages)".into());
+        }
+        if !(1..=1_000_000).contains(&self.ingest.queue_messages) {
+            p.push(format!("ingest.queue_messages: {} must lie in 1..=1000000", self.ingest.queue_messages));
+        }
+        if self.ingest.queue_bytes < 1024 {
+            p.push(format!("ingest.queue_bytes: {} must be at least 1024", self.ingest.queue_bytes));
         }
         if self.controllers.is_empty() {
             p.push("controller: at least one [[controller]] table is needed".into());

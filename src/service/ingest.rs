@@ -1,39 +1,118 @@
-//! The zenoh side of a controller: the subscription on `<prefix>/<id>/*/*` feeding its state,
-//! and the queryable on `<prefix>/<id>/matrix` answering `get` with the latest report. Thin:
+//! The zenoh side of a controller: the subscription on `<prefix>/<id>/*/*` feeding its state
+//! through a bounded queue (overload drops and counts messages, it never grows memory), and the
+//! queryable on `<prefix>/<id>/matrix` answering `get` with the latest report. Thin:
 //! decoding and alignment live in [`super::controller`].
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
-use tokio::sync::watch;
+use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
+use zenoh::sample::Sample;
 
+use super::align::DropReason;
 use super::metrics::{ControllerLabels, DropLabels};
 use super::payload::parse_key;
 use super::{ServiceError, Shared};
 
-/// Subscribes to the controller's inputs.
+/// The bounded queue between zenoh's receive thread and a controller's ingest task: at most
+/// `ingest.queue_messages` messages and `ingest.queue_bytes` payload bytes wait. The zenoh
+/// callback only enqueues (never blocks, never decodes); what does not fit is dropped and
+/// counted as `queue_full`, once per message.
+struct Queue {
+    bytes: AtomicUsize,
+    max_bytes: usize,
+    /// `queue_full` drops not yet added to the controller's own counters (the callback does not
+    /// take the controller's lock; the ingest task folds them in).
+    unfolded: AtomicU64,
+}
+
+impl Queue {
+    /// Reserves room for `n` bytes; false when the byte budget is spent.
+    fn reserve(&self, n: usize) -> bool {
+        self.bytes
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |b| (b + n <= self.max_bytes).then_some(b + n))
+            .is_ok()
+    }
+
+    fn release(&self, n: usize) {
+        self.bytes.fetch_sub(n, Ordering::AcqRel);
+    }
+}
+
+/// Subscribes to the controller's inputs through its bounded queue, and spawns the task that
+/// drains it.
 pub async fn spawn_subscriber(
     shared: Arc<Shared>,
     id: String,
     mut stop: watch::Receiver<bool>,
 ) -> Result<JoinHandle<()>, ServiceError> {
     let key = shared.key(&id, "*/*");
+    let cfg = &shared.config.ingest;
+    let (tx, mut rx) = mpsc::channel::<(Sample, usize)>(cfg.queue_messages);
+    let queue = Arc::new(Queue {
+        bytes: AtomicUsize::new(0),
+        max_bytes: cfg.queue_bytes,
+        unfolded: AtomicU64::new(0),
+    });
+    let labels = ControllerLabels { controller: id.clone() };
+    let full = shared
+        .metrics
+        .dropped
+        .get_or_create(&DropLabels { controller: id.clone(), reason: DropReason::QueueFull.as_str().into() })
+        .clone();
+    let (q, full_log) = (queue.clone(), id.clone());
     let sub = shared
         .session
         .declare_subscriber(&key)
+        .callback(move |sample: Sample| {
+            let n = sample.payload().len();
+            let queued = q.reserve(n)
+                && match tx.try_send((sample, n)) {
+                    Ok(()) => true,
+                    Err(_) => {
+                        q.release(n);
+                        false
+                    }
+                };
+            if !queued {
+                full.inc();
+                if q.unfolded.fetch_add(1, Ordering::AcqRel) == 0 {
+                    tracing::debug!(controller = %full_log, "ingest queue full: dropping messages");
+                }
+            }
+        })
         .await
         .map_err(|e| ServiceError::Zenoh(format!("subscribe {key}: {e}")))?;
     tracing::info!(%key, "subscribed");
     Ok(tokio::spawn(async move {
+        // Dropping the subscriber undeclares it: it lives as long as this task.
+        let _sub = sub;
+        let m = &shared.metrics;
         loop {
-            let sample = tokio::select! {
-                s = sub.recv_async() => match s { Ok(s) => s, Err(_) => break },
+            let (sample, n) = tokio::select! {
+                s = rx.recv() => match s { Some(s) => s, None => break },
                 _ = stop.changed() => break,
             };
+            queue.release(n);
             let bytes = sample.payload().to_bytes();
             on_message(&shared, &id, sample.key_expr().as_str(), &bytes);
+            fold(&shared, &id, &queue);
+            m.queue_messages.get_or_create(&labels).set(rx.len() as i64);
+            m.queue_bytes.get_or_create(&labels).set(queue.bytes.load(Ordering::Acquire) as i64);
         }
     }))
+}
+
+/// Adds the callback's `queue_full` drops to the controller's counters (the HTTP API's). A drop
+/// only happens while the queue holds messages, so a fold after each message misses none.
+fn fold(shared: &Shared, id: &str, queue: &Queue) {
+    let n = queue.unfolded.swap(0, Ordering::AcqRel);
+    if n > 0
+        && let Some(mut ctl) = shared.lock(id)
+    {
+        ctl.count_drop(DropReason::QueueFull, n);
+    }
 }
 
 /// Handles one message on `key` (public for tests that bypass zenoh).

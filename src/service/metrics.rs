@@ -107,6 +107,17 @@ pub struct Metrics {
     /// `mpm_store_ok`: 1 while the store's last write succeeded (or there is no store), 0 while
     /// it fails.
     pub store_ok: Gauge,
+    /// `mpm_ingest_queue_messages`: messages waiting in the controller's ingest queue.
+    pub queue_messages: Family<ControllerLabels, Gauge>,
+    /// `mpm_ingest_queue_bytes`: their payload bytes.
+    pub queue_bytes: Family<ControllerLabels, Gauge>,
+    /// `mpm_run_lateness_seconds`: how long after its scheduled instant the last run started.
+    pub run_lateness: Family<ControllerLabels, GaugeF>,
+    /// `mpm_runs_late_total`: runs that finished after the next scheduled instant (overran
+    /// their period). A controller is on schedule while this stays still.
+    pub runs_late: Family<ControllerLabels, Counter>,
+    /// `mpm_runs_missed_total`: scheduled runs skipped because the previous one was still going.
+    pub runs_missed: Family<ControllerLabels, Counter>,
 }
 
 impl Default for Metrics {
@@ -137,6 +148,11 @@ impl Metrics {
             time_jumps: Family::default(),
             store_errors: Family::default(),
             store_ok: Gauge::default(),
+            queue_messages: Family::default(),
+            queue_bytes: Family::default(),
+            run_lateness: Family::default(),
+            runs_late: Family::default(),
+            runs_missed: Family::default(),
             registry: Registry::default(),
         };
         registry.register(
@@ -200,6 +216,31 @@ impl Metrics {
         for op in ["flush", "alarm"] {
             let _ = m.store_errors.get_or_create(&StoreLabels { op: op.into() });
         }
+        registry.register(
+            "mpm_ingest_queue_messages",
+            "Messages waiting in the controller's bounded ingest queue",
+            m.queue_messages.clone(),
+        );
+        registry.register(
+            "mpm_ingest_queue_bytes",
+            "Payload bytes waiting in the controller's bounded ingest queue",
+            m.queue_bytes.clone(),
+        );
+        registry.register(
+            "mpm_run_lateness_seconds",
+            "How long after its scheduled instant the last analysis started",
+            m.run_lateness.clone(),
+        );
+        registry.register(
+            "mpm_runs_late",
+            "Analyses that finished after the next scheduled instant (overran their period)",
+            m.runs_late.clone(),
+        );
+        registry.register(
+            "mpm_runs_missed",
+            "Scheduled analyses skipped because the previous one was still running",
+            m.runs_missed.clone(),
+        );
         Self { registry, ..m }
     }
 
@@ -216,6 +257,10 @@ impl Metrics {
         let _ = self.gap_rows.get_or_create(&c);
         let _ = self.time_jumps.get_or_create(&c);
         let _ = self.window_fill.get_or_create(&c);
+        let _ = self.queue_messages.get_or_create(&c);
+        let _ = self.queue_bytes.get_or_create(&c);
+        let _ = self.runs_late.get_or_create(&c);
+        let _ = self.runs_missed.get_or_create(&c);
     }
 
     /// The text exposition.

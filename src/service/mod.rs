@@ -13,6 +13,7 @@
 //! * [`guard`]: the HTTP API's bearer token, body size and rate limits.
 //! * [`ingest`], [`scheduler`]: the async tasks (zenoh subscription, queryable, periodic runs).
 //! * [`demo`]: the simulated plant of `mpmwatch demo`.
+//! * [`loadgen`]: synthetic controllers publishing over zenoh (`mpmwatch loadgen`).
 //!
 //! Only the last group and [`Service::start`] touch tokio and zenoh.
 
@@ -25,6 +26,7 @@ pub mod demo;
 pub mod guard;
 pub mod http;
 pub mod ingest;
+pub mod loadgen;
 pub mod metrics;
 pub mod page;
 pub mod payload;

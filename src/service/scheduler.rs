@@ -14,21 +14,67 @@ use super::analysis::{self, RunReport, RunStatus};
 use super::metrics::{ChannelLabels, ControllerLabels, RunLabels, StoreLabels, VerdictLabels};
 use super::{Shared, now_rfc3339};
 
+/// One analysis at a time per process. Each run already uses every core (rayon), so running
+/// several at once only makes all of them finish late together (measured: 50 concurrent 3×3
+/// runs each took 90–120 s instead of a few seconds); one at a time, the runs that fit in the
+/// period finish on time and an overloaded instance shows it in `mpm_runs_late_total`.
+static ANALYSIS_SLOT: tokio::sync::Semaphore = tokio::sync::Semaphore::const_new(1);
+
 /// Runs controller `id`'s analyses every `every` seconds until `stop`.
+///
+/// The schedule is a fixed grid `start + phase + k·every`. `phase` spreads the controllers of
+/// one instance over the period (controller `i` of `n` starts `i/n` of a period later), so their
+/// analyses do not all compete for the cores at the same instant. A run that overruns the next
+/// instant is counted in `mpm_runs_late_total`, and the instants it overran are skipped (counted
+/// in `mpm_runs_missed_total`), so a slow instance shows in its metrics instead of drifting.
 pub fn spawn(shared: Arc<Shared>, id: String, mut stop: watch::Receiver<bool>) -> JoinHandle<()> {
     tokio::spawn(async move {
-        let every = shared.lock(&id).map_or(10.0, |c| c.cfg.every);
-        let mut tick = tokio::time::interval(Duration::from_secs_f64(every));
-        tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
-        tick.tick().await; // the first tick fires at once: let data arrive first
+        let every = Duration::from_secs_f64(shared.lock(&id).map_or(10.0, |c| c.cfg.every));
+        let n = shared.controllers.len().max(1);
+        let i = shared.controllers.keys().position(|k| k == &id).unwrap_or(0);
+        let phase = every.mul_f64(i as f64 / n as f64);
+        let labels = ControllerLabels { controller: id.clone() };
+        let m = &shared.metrics;
+        // The first run comes one period after the start: let data arrive first.
+        let mut due = Instant::now() + every + phase;
         loop {
             tokio::select! {
-                _ = tick.tick() => {}
+                _ = tokio::time::sleep_until(due.into()) => {}
                 _ = stop.changed() => break,
             }
+            let slot = tokio::select! {
+                p = ANALYSIS_SLOT.acquire() => p.ok(),
+                _ = stop.changed() => break,
+            };
+            // Lateness includes the wait for the analysis slot.
+            m.run_lateness.get_or_create(&labels).set(due.elapsed().as_secs_f64());
             run_once(&shared, &id).await;
+            drop(slot);
+            let (next, missed) = next_due(due, every, Instant::now());
+            if missed > 0 {
+                m.runs_late.get_or_create(&labels).inc();
+                m.runs_missed.get_or_create(&labels).inc_by(missed);
+                tracing::warn!(controller = %id, missed, "analysis overran its period");
+            }
+            due = next;
         }
     })
+}
+
+/// The next instant of the grid `due + k·every` (k ≥ 1) that is not yet past at `now`, and how
+/// many instants were skipped to reach it.
+fn next_due(due: Instant, every: Duration, now: Instant) -> (Instant, u64) {
+    let mut next = due + every;
+    let mut missed = 0;
+    if now > next && !every.is_zero() {
+        missed = ((now - next).as_secs_f64() / every.as_secs_f64()).ceil() as u64;
+        next += every.mul_f64(missed as f64);
+        if next < now {
+            next += every;
+            missed += 1;
+        }
+    }
+    (next, missed)
 }
 
 /// One analysis of controller `id`, with everything that follows it. Returns the report, or
@@ -215,5 +261,20 @@ pub async fn flush(shared: &Arc<Shared>) {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overrun_instants_are_skipped_and_counted() {
+        let t0 = Instant::now();
+        let s = Duration::from_secs(10);
+        assert_eq!(next_due(t0, s, t0 + Duration::from_secs(3)), (t0 + s, 0));
+        assert_eq!(next_due(t0, s, t0 + Duration::from_secs(10)), (t0 + s, 0));
+        assert_eq!(next_due(t0, s, t0 + Duration::from_secs(11)), (t0 + 2 * s, 1));
+        assert_eq!(next_due(t0, s, t0 + Duration::from_secs(35)), (t0 + 4 * s, 3));
     }
 }
