@@ -8,7 +8,8 @@ use mpmwatch::sim::scenarios::{casebook_specs, describe, diagnose_record, run};
 fn explore() {
     let only = std::env::var("CASE").ok();
     let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
-    for spec in casebook_specs(n, 100) {
+    let seed: u64 = std::env::var("SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(100);
+    for spec in casebook_specs(n, seed) {
         if only.as_ref().is_some_and(|o| !spec.name.contains(o.as_str())) {
             continue;
         }
@@ -35,8 +36,18 @@ fn explore() {
             .report
             .channels
             .iter()
-            .filter(|c| c.significant)
-            .map(|c| format!("{}→{}{}", c.input, c.output, if c.ccf_significant { "(ccf)" } else { "" }))
+            .map(|c| {
+                format!(
+                    "{}→{}{}{} p{:.3}/{:.3}{}",
+                    c.input,
+                    c.output,
+                    if c.significant { " MI" } else { "" },
+                    if c.ccf_significant { " ccf" } else { "" },
+                    c.projection_r2,
+                    c.projection_critical,
+                    if c.projection_significant { "*" } else { "" }
+                )
+            })
             .collect();
         eprintln!(
             "{} [{}] ratio {:.2} | sig {:?} | {:?} | holdout {:?}→{:?} | {:.1}s",

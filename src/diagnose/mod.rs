@@ -22,6 +22,7 @@ pub mod describe;
 mod error;
 pub mod fit;
 pub mod fitness;
+pub mod locate;
 pub mod nominal;
 pub mod report;
 pub mod select;
@@ -208,6 +209,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut findings = Vec::new();
     let mut corrected: Vec<Vec<f64>> = input.simulated.iter().map(|s| s.values.to_vec()).collect();
     let u_all: Vec<&[f64]> = input.inputs.iter().map(|u| u.values).collect();
+    let exc_all: Vec<&[f64]> = exc.iter().map(|e| e.values).collect();
     let u_driven: Vec<Vec<f64>> = match &input.excitations {
         Some(e) => {
             let ev: Vec<&[f64]> = e.iter().map(|s| s.values).collect();
@@ -215,6 +217,25 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         }
         None => u_all.iter().map(|u| u.to_vec()).collect(),
     };
+    // The context (nominal model, channels) of every testable output, and the dither-projection
+    // test of every element (see `locate`): a second way for a channel to be flagged.
+    let ctxs: Vec<OutputCtx> = testable
+        .iter()
+        .map(|&j| output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split))
+        .collect();
+    let projection = if testable.is_empty() {
+        Vec::new()
+    } else {
+        let exc_tr: Vec<&[f64]> = exc_all.iter().map(|e| &e[..n_train]).collect();
+        let u_tr: Vec<&[f64]> = u_all.iter().map(|u| &u[..n_train]).collect();
+        let map = locate::DrivenMap::fit(&u_tr, &exc_tr, split.train.clone());
+        let r_tr: Vec<&[f64]> = testable.iter().map(|&j| &residuals[j][..n_train]).collect();
+        let models: Vec<&nominal::NominalArx> = ctxs.iter().map(|c| &c.model).collect();
+        let has: Vec<Vec<bool>> = ctxs.iter().map(|c| c.has_channel.clone()).collect();
+        let po = locate::ProjectionOptions { surrogates: opts.surrogates, seed: opts.seed, ..Default::default() };
+        locate::projection_tests(&exc_tr, &map, &r_tr, &models, &has, split.train.clone(), &po)
+    };
+    let proj = |mv: usize, cv: usize| projection.iter().find(|p| p.input == mv && p.output == cv);
     if let Some(m) = &matrix {
         for c in &m.cells {
             let j = testable[c.cv];
@@ -227,6 +248,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             };
             let verdict =
                 m.channels.iter().find(|ch| ch.mv_index == c.mv && ch.cv_index == c.cv).map(|ch| ch.verdict);
+            let p = proj(c.mv, c.cv);
             channels.push(ChannelReport {
                 input: input.inputs[c.mv].name.to_string(),
                 output: input.outputs[j].name.to_string(),
@@ -237,20 +259,27 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                     .and_then(|v| serde_json::to_value(v).ok().and_then(|v| v.as_str().map(str::to_string)))
                     .unwrap_or_default(),
                 ccf_significant: c.ccf.significant,
+                projection_r2: p.map_or(0.0, |p| p.r2),
+                projection_critical: p.map_or(0.0, |p| p.threshold.critical),
+                projection_significant: p.is_some_and(|p| p.significant),
             });
         }
         for (cv, &j) in testable.iter().enumerate() {
-            let flagged: Vec<usize> =
-                m.cells.iter().filter(|c| c.cv == cv && c.significant).map(|c| c.mv).collect();
+            let flagged: Vec<usize> = (0..input.inputs.len())
+                .filter(|&i| {
+                    m.cells.iter().any(|c| c.cv == cv && c.mv == i && c.significant)
+                        || proj(i, cv).is_some_and(|p| p.significant)
+                })
+                .collect();
             if flagged.is_empty() {
                 continue;
             }
-            let ctx = output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split);
-            let inst = instrument_ctx(&ctx, &u_driven);
+            let ctx = &ctxs[cv];
+            let inst = instrument_ctx(ctx, &u_driven);
             let r = &residuals[j];
-            let scoring = scoring_ctxs(&ctx, &u_all, &u_driven);
-            let ranked = select::rank(&ctx, &inst, &scoring, r, &flagged, &split, opts.penalty);
-            let (finding, corr) = decide(&ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
+            let scoring = scoring_ctxs(ctx, &u_all, &u_driven);
+            let ranked = select::rank(ctx, &inst, &scoring, r, &flagged, &split, opts.penalty);
+            let (finding, corr) = decide(ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
             if let Some(c) = corr {
                 corrected[j].iter_mut().zip(&c).for_each(|(a, b)| *a += b);
             }
@@ -269,7 +298,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         after.insert(y.name.to_string(), fit_pct(&y.values[n_train..], &corrected[j][n_train..]));
     }
     let report = DiagnosisReport {
-        mismatch: matrix.as_ref().is_some_and(|m| m.mismatch),
+        mismatch: matrix.as_ref().is_some_and(|m| m.mismatch) || projection.iter().any(|p| p.significant),
         channels,
         findings,
         holdout: Holdout { start_index: n_train, fit_before_pct: before, fit_after_pct: after },
