@@ -3,7 +3,7 @@
 //! tail) in simulation mode, with a BIC-style penalty per coefficient and per grid value. The
 //! intercept-only correction is the null hypothesis every term must beat.
 
-use super::candidates::{OutputCtx, Term, grid};
+use super::candidates::{ActsOn, OutputCtx, Term, grid};
 use super::fit::{frols, instrumental};
 use super::simulate::{FittedTerm, correction};
 
@@ -192,8 +192,26 @@ pub fn rank(
     if let Some((score, sse, complexity)) = fold_score(None) {
         out.push(Scored { fitted: None, sse, complexity, score });
     }
+    // An output-side effect (a sensor map, an output clip, a force fed back from the output) is a
+    // property of the output, not of one channel: it is tried once, through the flagged input
+    // whose dither-driven response carries the most of this output's variance (its own
+    // actuator). When two channels share their dynamics, the data cannot tell through which one
+    // a fed-back force enters; trying it on every flagged input would let noise pick.
+    let var_of = |x: &[f64]| {
+        let rows = split.train.clone();
+        let m = x[rows.clone()].iter().sum::<f64>() / rows.len().max(1) as f64;
+        x[rows].iter().map(|v| (v - m).powi(2)).sum::<f64>()
+    };
+    let dominant = inputs
+        .iter()
+        .copied()
+        .filter(|&i| ctx.has_channel[i])
+        .max_by(|&a, &b| var_of(&inst.s_channel[a]).total_cmp(&var_of(&inst.s_channel[b])));
     for &i in inputs {
         let mut terms = grid(ctx, i, split.fit.clone());
+        if dominant.is_some_and(|d| d != i) {
+            terms.retain(|t| t.acts_on() == ActsOn::Input);
+        }
         if ctx.has_channel[i] {
             terms.push(Term::Bilinear(Vec::new()));
         }
