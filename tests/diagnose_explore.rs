@@ -15,7 +15,9 @@ fn explore() {
         }
         let rec = run(&spec).unwrap();
         let t = std::time::Instant::now();
-        let d = diagnose_record(&rec, &DiagnoseOptions::default()).unwrap();
+        let opts =
+            DiagnoseOptions { projected_scoring: std::env::var("SHIFTED").is_err(), ..Default::default() };
+        let d = diagnose_record(&rec, &opts).unwrap();
         let f: Vec<String> = d
             .report
             .findings
@@ -83,11 +85,18 @@ fn detail() {
             continue;
         }
         let rec = run(&spec).unwrap();
-        let d = diagnose_record(&rec, &DiagnoseOptions::default()).unwrap();
+        let opts =
+            DiagnoseOptions { projected_scoring: std::env::var("SHIFTED").is_err(), ..Default::default() };
+        let d = diagnose_record(&rec, &opts).unwrap();
         for f in &d.report.findings {
             eprintln!("{} {}→{} {} {:?}", spec.name, f.input, f.output, f.physics.name(), f.parameters);
             for t in &f.tried {
-                eprintln!("    {:<18} {:>9.1} {:>7.2}", t.physics.name(), t.score_vs_null, t.validation_gain_pct);
+                eprintln!(
+                    "    {:<18} {:>9.1} {:>7.2}",
+                    t.physics.name(),
+                    t.score_vs_null,
+                    t.validation_gain_pct
+                );
             }
         }
     }
@@ -97,7 +106,8 @@ fn detail() {
 #[test]
 #[ignore]
 fn tanks_calibration() {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/cascaded_tanks/dataBenchmark.csv");
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/cascaded_tanks/dataBenchmark.csv");
     let text = std::fs::read_to_string(&p).unwrap();
     let mut cols = vec![Vec::new(); 4];
     for l in text.lines().skip(1) {
@@ -106,12 +116,16 @@ fn tanks_calibration() {
         }
     }
     let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
-    let run = mpmwatch::diagnose::tanks::overflow_free_runs(ye, 50).into_iter().max_by_key(|r| r.len()).unwrap();
+    let run =
+        mpmwatch::diagnose::tanks::overflow_free_runs(ye, 50).into_iter().max_by_key(|r| r.len()).unwrap();
     eprintln!("runs {:?}", mpmwatch::diagnose::tanks::overflow_free_runs(ye, 50));
     let m = mpmwatch::diagnose::tanks::calibrate(ue, ye, 4.0);
     let se = m.simulate_from(ue, 4.0, ye[0]);
     let sv = m.simulate_from(uv, 4.0, yv[0]);
-    let fr = mpmwatch::diagnose::fit_pct(&ye[run.clone()], &m.simulate_from(&ue[run.clone()], 4.0, ye[run.start])[..]);
+    let fr = mpmwatch::diagnose::fit_pct(
+        &ye[run.clone()],
+        &m.simulate_from(&ue[run.clone()], 4.0, ye[run.start])[..],
+    );
     eprintln!("run {run:?} model {m:?}");
     eprintln!(
         "FIT on run {fr:.1}, est {:.1}, val {:.1}; min sim est {:.2} val {:.2}",
@@ -121,7 +135,10 @@ fn tanks_calibration() {
         sv.iter().fold(f64::MAX, |a, &b| a.min(b))
     );
     for k in (0..1024).step_by(64) {
-        eprintln!("{k:>5} u {:.2} y {:.2} s {:.2} | val u {:.2} y {:.2} s {:.2}", ue[k], ye[k], se[k], uv[k], yv[k], sv[k]);
+        eprintln!(
+            "{k:>5} u {:.2} y {:.2} s {:.2} | val u {:.2} y {:.2} s {:.2}",
+            ue[k], ye[k], se[k], uv[k], yv[k], sv[k]
+        );
     }
 }
 
@@ -140,7 +157,13 @@ fn output_side_debug() {
         let rec = run(&spec).unwrap();
         let n = 3000;
         let n_train = 2100;
-        let split = Split { features: None, fit: 20..1500, validate: 1500..n_train, train: 20..n_train, folds: vec![] };
+        let split = Split {
+            features: None,
+            fit: 20..1500,
+            validate: 1500..n_train,
+            train: 20..n_train,
+            folds: vec![],
+        };
         let u: Vec<&[f64]> = rec.u.iter().map(|v| v.as_slice()).collect();
         let e: Vec<&[f64]> = rec.d.iter().map(|v| v.as_slice()).collect();
         let j = spec.channel.1;
@@ -163,7 +186,8 @@ fn output_side_debug() {
         }
         let val = 1500..n_train;
         for term in [Term::AbsSensor(0.0), Term::SaturationOut { lo: 0.068, hi: f64::INFINITY }] {
-            let f = FittedTerm { input: spec.channel.0, term: term.clone(), intercept: 0.0, coefs: vec![1.0] };
+            let f =
+                FittedTerm { input: spec.channel.0, term: term.clone(), intercept: 0.0, coefs: vec![1.0] };
             let sse = |c: &[f64]| {
                 let m = (20..1500).map(|t| r[t] - c[t]).sum::<f64>() / 1480.0;
                 val.clone().map(|t| (r[t] - c[t] - m).powi(2)).sum::<f64>()

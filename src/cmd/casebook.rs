@@ -357,8 +357,11 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     // simulation sees) and diagnosed as one 2048-sample record: the validation record is the
     // held-out tail.
     let model = mpmwatch::diagnose::tanks::calibrate(&ue, &ye, 4.0);
-    let s: Vec<f64> =
-        model.simulate_from(&ue, 4.0, ye[0]).into_iter().chain(model.simulate_from(&uv, 4.0, yv[0])).collect();
+    let s: Vec<f64> = model
+        .simulate_from(&ue, 4.0, ye[0])
+        .into_iter()
+        .chain(model.simulate_from(&uv, 4.0, yv[0]))
+        .collect();
     let u: Vec<f64> = ue.iter().chain(&uv).copied().collect();
     let y: Vec<f64> = ye.iter().chain(&yv).copied().collect();
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();

@@ -201,7 +201,8 @@ pub fn projection_tests(
     // Whitening of each residual, applied to the features alike (generalised least squares).
     let whiteners: Vec<ArWhitener> =
         residuals.iter().map(|r| ArWhitener::fit(&r[start..end], opts.whiten)).collect();
-    let white_r: Vec<Vec<f64>> = residuals.iter().zip(&whiteners).map(|(r, w)| w.apply(&r[start..end])).collect();
+    let white_r: Vec<Vec<f64>> =
+        residuals.iter().zip(&whiteners).map(|(r, w)| w.apply(&r[start..end])).collect();
     let stat = |exc_s: &[&[f64]], i: usize, j: usize| -> (f64, usize) {
         let ud = map.apply(i, exc_s);
         let cols: Vec<Vec<f64>> = features(exc_s[i], &ud, models[j], i, has_channel[j][i])
@@ -223,7 +224,8 @@ pub fn projection_tests(
             let sur: Vec<f64> = (0..opts.surrogates)
                 .map(|_| {
                     let s = draw_shift(exc[i], b, &mut rng);
-                    let shifted: Vec<Vec<f64>> = exc.iter().map(|e| (0..n).map(|t| e[(t + s) % n]).collect()).collect();
+                    let shifted: Vec<Vec<f64>> =
+                        exc.iter().map(|e| (0..n).map(|t| e[(t + s) % n]).collect()).collect();
                     let refs: Vec<&[f64]> = shifted.iter().map(|v| v.as_slice()).collect();
                     stat(&refs, i, j).0
                 })
