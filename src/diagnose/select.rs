@@ -177,6 +177,7 @@ pub fn score(
 /// part. The shift breaks the link to the disturbance now in the residual (so no hypothesis can
 /// win by cancelling it), while the inputs keep their full spread, so a nonlinearity is judged at
 /// the amplitudes the plant saw (the average estimates `E[c(u) | dither]`).
+#[allow(clippy::too_many_arguments)]
 pub fn rank(
     ctx: &OutputCtx,
     inst: &OutputCtx,

@@ -89,7 +89,8 @@ pub fn overflow_free_runs(y: &[f64], min_len: usize) -> Vec<std::ops::Range<usiz
 pub fn calibrate(u: &[f64], y: &[f64], ts: f64) -> TwoTanks {
     let mut runs = overflow_free_runs(y, RECOVERY_SAMPLES);
     if runs.iter().map(|r| r.len()).sum::<usize>() < 100 {
-        runs = vec![0..y.len()];
+        runs.clear();
+        runs.push(0..y.len());
     }
     let cost = |p: &TwoTanks| -> f64 {
         let c: f64 = runs
