@@ -90,7 +90,7 @@ fn saturation_mimo() {
 }
 
 #[test]
-#[ignore = "known failure: the MI matrix flags no channel on c23/c24"]
+#[ignore = "known failure: c23/c24 are flagged (dither-projection test) but the shifted closed-loop scoring names backlash / an output clip; the projected scoring names abs_sensor and loses four other classes (docs/diagnose.md)"]
 fn abs_sensor() {
     recovers("c23_");
 }

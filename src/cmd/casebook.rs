@@ -49,6 +49,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         opts.seed,
         opts.lags.max
     ));
+    md.push_str("The CCF column: any lag of the linear cross-correlation of the true channel's dither with its residual beyond the family-wise (Bonferroni, α = 0.05 over the lags) limit of the MI matrix's baseline.\n\n");
     md.push_str("| case | true effect | effect/disturbance variance | channel found | physics named | held-out FIT before → after | did the CCF see it? |\n| --- | --- | --- | --- | --- | --- | --- |\n");
     let (mut named, mut chan, mut total, mut false_alarms, mut quiet) = (0, 0, 0, 0, 0);
     for (k, spec) in specs.iter().enumerate() {
@@ -96,7 +97,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             spec.effect.physics(),
             ci + 1,
             cj + 1,
-            describe(spec.effect, rec.strength),
+            describe(spec.effect, rec.strength).replace('|', "\\|"),
             rec.effect_ratio,
             found_channel,
             physics,
