@@ -8,13 +8,16 @@ use mpmwatch::sim::scenarios::{casebook_specs, describe, diagnose_record, run};
 fn explore() {
     let only = std::env::var("CASE").ok();
     let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
-    for spec in casebook_specs(n, 100) {
+    let seed: u64 = std::env::var("SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(100);
+    for spec in casebook_specs(n, seed) {
         if only.as_ref().is_some_and(|o| !spec.name.contains(o.as_str())) {
             continue;
         }
         let rec = run(&spec).unwrap();
         let t = std::time::Instant::now();
-        let d = diagnose_record(&rec, &DiagnoseOptions::default()).unwrap();
+        let opts =
+            DiagnoseOptions { projected_scoring: std::env::var("SHIFTED").is_err(), ..Default::default() };
+        let d = diagnose_record(&rec, &opts).unwrap();
         let f: Vec<String> = d
             .report
             .findings
@@ -35,8 +38,18 @@ fn explore() {
             .report
             .channels
             .iter()
-            .filter(|c| c.significant)
-            .map(|c| format!("{}→{}{}", c.input, c.output, if c.ccf_significant { "(ccf)" } else { "" }))
+            .map(|c| {
+                format!(
+                    "{}→{}{}{} p{:.3}/{:.3}{}",
+                    c.input,
+                    c.output,
+                    if c.significant { " MI" } else { "" },
+                    if c.ccf_significant { " ccf" } else { "" },
+                    c.projection_r2,
+                    c.projection_critical,
+                    if c.projection_significant { "*" } else { "" }
+                )
+            })
             .collect();
         eprintln!(
             "{} [{}] ratio {:.2} | sig {:?} | {:?} | holdout {:?}→{:?} | {:.1}s",
@@ -57,6 +70,142 @@ fn explore() {
                 .map(|t| format!("{} {:.1}/{:.2}", t.physics.name(), t.score_vs_null, t.validation_gain_pct))
                 .collect();
             eprintln!("    tried {:?}", tr);
+        }
+    }
+}
+
+/// One case's hypotheses in detail: every class's best score against the null (CASE=name).
+#[test]
+#[ignore]
+fn detail() {
+    let only = std::env::var("CASE").unwrap_or_else(|_| "c23".into());
+    let seed: u64 = std::env::var("SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(100);
+    for spec in casebook_specs(3000, seed) {
+        if !spec.name.contains(only.as_str()) {
+            continue;
+        }
+        let rec = run(&spec).unwrap();
+        let opts =
+            DiagnoseOptions { projected_scoring: std::env::var("SHIFTED").is_err(), ..Default::default() };
+        let d = diagnose_record(&rec, &opts).unwrap();
+        for f in &d.report.findings {
+            eprintln!("{} {}→{} {} {:?}", spec.name, f.input, f.output, f.physics.name(), f.parameters);
+            for t in &f.tried {
+                eprintln!(
+                    "    {:<18} {:>9.1} {:>7.2}",
+                    t.physics.name(),
+                    t.score_vs_null,
+                    t.validation_gain_pct
+                );
+            }
+        }
+    }
+}
+
+/// The Torricelli calibration on the cascaded tanks (needs ../shared/data).
+#[test]
+#[ignore]
+fn tanks_calibration() {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/cascaded_tanks/dataBenchmark.csv");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let mut cols = vec![Vec::new(); 4];
+    for l in text.lines().skip(1) {
+        for (c, v) in l.split(',').take(4).enumerate() {
+            cols[c].push(v.trim().parse::<f64>().unwrap_or(f64::NAN));
+        }
+    }
+    let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
+    let run =
+        mpmwatch::diagnose::tanks::overflow_free_runs(ye, 50).into_iter().max_by_key(|r| r.len()).unwrap();
+    eprintln!("runs {:?}", mpmwatch::diagnose::tanks::overflow_free_runs(ye, 50));
+    let m = mpmwatch::diagnose::tanks::calibrate(ue, ye, 4.0);
+    let se = m.simulate_from(ue, 4.0, ye[0]);
+    let sv = m.simulate_from(uv, 4.0, yv[0]);
+    let fr = mpmwatch::diagnose::fit_pct(
+        &ye[run.clone()],
+        &m.simulate_from(&ue[run.clone()], 4.0, ye[run.start])[..],
+    );
+    eprintln!("run {run:?} model {m:?}");
+    eprintln!(
+        "FIT on run {fr:.1}, est {:.1}, val {:.1}; min sim est {:.2} val {:.2}",
+        mpmwatch::diagnose::fit_pct(ye, &se),
+        mpmwatch::diagnose::fit_pct(yv, &sv),
+        se.iter().fold(f64::MAX, |a, &b| a.min(b)),
+        sv.iter().fold(f64::MAX, |a, &b| a.min(b))
+    );
+    for k in (0..1024).step_by(64) {
+        eprintln!(
+            "{k:>5} u {:.2} y {:.2} s {:.2} | val u {:.2} y {:.2} s {:.2}",
+            ue[k], ye[k], se[k], uv[k], yv[k], sv[k]
+        );
+    }
+}
+
+/// Output-side hypotheses on one case, by context (CASE=name).
+#[test]
+#[ignore]
+fn output_side_debug() {
+    use mpmwatch::diagnose::candidates::Term;
+    use mpmwatch::diagnose::simulate::{FittedTerm, correction};
+    use mpmwatch::diagnose::{dither_driven, instrument_ctx, output_ctx, scoring_ctxs, select::Split};
+    let only = std::env::var("CASE").unwrap_or_else(|_| "c23".into());
+    for spec in casebook_specs(3000, 100) {
+        if !spec.name.contains(only.as_str()) {
+            continue;
+        }
+        let rec = run(&spec).unwrap();
+        let n = 3000;
+        let n_train = 2100;
+        let split = Split {
+            features: None,
+            fit: 20..1500,
+            validate: 1500..n_train,
+            train: 20..n_train,
+            folds: vec![],
+        };
+        let u: Vec<&[f64]> = rec.u.iter().map(|v| v.as_slice()).collect();
+        let e: Vec<&[f64]> = rec.d.iter().map(|v| v.as_slice()).collect();
+        let j = spec.channel.1;
+        let ctx = output_ctx(&u, &rec.y[j], &rec.s[j], &split);
+        let ud: Vec<Vec<f64>> = u.iter().map(|x| dither_driven(x, &e, 20..n_train)).collect();
+        let inst = instrument_ctx(&ctx, &ud);
+        let sc = scoring_ctxs(&ctx, &u, &ud);
+        let r: Vec<f64> = rec.y[j].iter().zip(&rec.s[j]).map(|(a, b)| a - b).collect();
+        let stats = |x: &[f64]| {
+            let m = x.iter().sum::<f64>() / x.len() as f64;
+            let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
+            let neg = x.iter().filter(|v| **v < 0.0).count() as f64 / x.len() as f64;
+            format!("mean {m:.3} sd {sd:.3} neg {neg:.3}")
+        };
+        eprintln!("y0 {:.3} u0 {:?}", ctx.y0, ctx.u0);
+        eprintln!("s     {}", stats(&ctx.s[20..n_train]));
+        eprintln!("inst  {}", stats(&inst.s[20..n_train]));
+        for (k, c) in sc.iter().enumerate() {
+            eprintln!("sc{k}   {}", stats(&c.s[20..n_train]));
+        }
+        let val = 1500..n_train;
+        for term in [Term::AbsSensor(0.0), Term::SaturationOut { lo: 0.068, hi: f64::INFINITY }] {
+            let f =
+                FittedTerm { input: spec.channel.0, term: term.clone(), intercept: 0.0, coefs: vec![1.0] };
+            let sse = |c: &[f64]| {
+                let m = (20..1500).map(|t| r[t] - c[t]).sum::<f64>() / 1480.0;
+                val.clone().map(|t| (r[t] - c[t] - m).powi(2)).sum::<f64>()
+            };
+            let c_rec = correction(&ctx, &f).unwrap();
+            let mut c_avg = vec![0.0; n];
+            for s in &sc {
+                let c = correction(s, &f).unwrap();
+                c_avg.iter_mut().zip(&c).for_each(|(a, b)| *a += b / sc.len() as f64);
+            }
+            let c_inst = correction(&inst, &f).unwrap();
+            eprintln!(
+                "{term:?}: SSE null {:.3} recorded {:.3} scoring {:.3} inst {:.3}",
+                sse(&vec![0.0; n]),
+                sse(&c_rec),
+                sse(&c_avg),
+                sse(&c_inst)
+            );
         }
     }
 }

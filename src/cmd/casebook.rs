@@ -49,6 +49,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         opts.seed,
         opts.lags.max
     ));
+    md.push_str("The CCF column: any lag of the linear cross-correlation of the true channel's dither with its residual beyond the family-wise (Bonferroni, α = 0.05 over the lags) limit of the MI matrix's baseline.\n\n");
     md.push_str("| case | true effect | effect/disturbance variance | channel found | physics named | held-out FIT before → after | did the CCF see it? |\n| --- | --- | --- | --- | --- | --- | --- |\n");
     let (mut named, mut chan, mut total, mut false_alarms, mut quiet) = (0, 0, 0, 0, 0);
     for (k, spec) in specs.iter().enumerate() {
@@ -96,7 +97,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             spec.effect.physics(),
             ci + 1,
             cj + 1,
-            describe(spec.effect, rec.strength),
+            describe(spec.effect, rec.strength).replace('|', "\\|"),
             rec.effect_ratio,
             found_channel,
             physics,
@@ -352,10 +353,16 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     let (h, c) = read_plain(&p)?;
     let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
     let (uv, yv) = (column(&h, &c, "uVal", &p)?, column(&h, &c, "yVal", &p)?);
-    // Calibrated on the estimation record, then both records simulated (each from its own
-    // start) and diagnosed as one 2048-sample record: the validation record is the held-out tail.
+    // Calibrated on the estimation record's longest overflow-free run, then both records
+    // simulated (each from its own measured initial level, the only recorded output the
+    // simulation sees) and diagnosed as one 2048-sample record: the validation record is the
+    // held-out tail.
     let model = mpmwatch::diagnose::tanks::calibrate(&ue, &ye, 4.0);
-    let s: Vec<f64> = model.simulate(&ue, 4.0).into_iter().chain(model.simulate(&uv, 4.0)).collect();
+    let s: Vec<f64> = model
+        .simulate_from(&ue, 4.0, ye[0])
+        .into_iter()
+        .chain(model.simulate_from(&uv, 4.0, yv[0]))
+        .collect();
     let u: Vec<f64> = ue.iter().chain(&uv).copied().collect();
     let y: Vec<f64> = ye.iter().chain(&yv).copied().collect();
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();

@@ -22,6 +22,7 @@ pub mod describe;
 mod error;
 pub mod fit;
 pub mod fitness;
+pub mod locate;
 pub mod nominal;
 pub mod report;
 pub mod select;
@@ -73,6 +74,10 @@ pub struct DiagnoseOptions {
     pub min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,
+    /// Closed loop: score hypotheses by the part of the corrected residual the dithers explain
+    /// (projection on dither features, [`select::Projector`]) rather than by evaluating the
+    /// correction on inputs with a shifted disturbance part.
+    pub projected_scoring: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -85,6 +90,7 @@ impl Default for DiagnoseOptions {
             penalty: 1.0,
             min_gain_pct: 0.5,
             warmup: 20,
+            projected_scoring: false,
         }
     }
 }
@@ -208,6 +214,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut findings = Vec::new();
     let mut corrected: Vec<Vec<f64>> = input.simulated.iter().map(|s| s.values.to_vec()).collect();
     let u_all: Vec<&[f64]> = input.inputs.iter().map(|u| u.values).collect();
+    let exc_all: Vec<&[f64]> = exc.iter().map(|e| e.values).collect();
     let u_driven: Vec<Vec<f64>> = match &input.excitations {
         Some(e) => {
             let ev: Vec<&[f64]> = e.iter().map(|s| s.values).collect();
@@ -215,6 +222,26 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         }
         None => u_all.iter().map(|u| u.to_vec()).collect(),
     };
+    // The context (nominal model, channels) of every testable output, and the dither-projection
+    // test of every element (see `locate`): a second way for a channel to be flagged.
+    let ctxs: Vec<OutputCtx> = testable
+        .iter()
+        .map(|&j| output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split))
+        .collect();
+    let projection = if testable.is_empty() {
+        Vec::new()
+    } else {
+        let exc_tr: Vec<&[f64]> = exc_all.iter().map(|e| &e[..n_train]).collect();
+        let u_tr: Vec<&[f64]> = u_all.iter().map(|u| &u[..n_train]).collect();
+        let map = locate::DrivenMap::fit(&u_tr, &exc_tr, split.train.clone());
+        let r_tr: Vec<&[f64]> = testable.iter().map(|&j| &residuals[j][..n_train]).collect();
+        let models: Vec<&nominal::NominalArx> = ctxs.iter().map(|c| &c.model).collect();
+        let has: Vec<Vec<bool>> = ctxs.iter().map(|c| c.has_channel.clone()).collect();
+        let po =
+            locate::ProjectionOptions { surrogates: opts.surrogates, seed: opts.seed, ..Default::default() };
+        locate::projection_tests(&exc_tr, &map, &r_tr, &models, &has, split.train.clone(), &po)
+    };
+    let proj = |mv: usize, cv: usize| projection.iter().find(|p| p.input == mv && p.output == cv);
     if let Some(m) = &matrix {
         for c in &m.cells {
             let j = testable[c.cv];
@@ -227,6 +254,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             };
             let verdict =
                 m.channels.iter().find(|ch| ch.mv_index == c.mv && ch.cv_index == c.cv).map(|ch| ch.verdict);
+            let p = proj(c.mv, c.cv);
             channels.push(ChannelReport {
                 input: input.inputs[c.mv].name.to_string(),
                 output: input.outputs[j].name.to_string(),
@@ -237,20 +265,28 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                     .and_then(|v| serde_json::to_value(v).ok().and_then(|v| v.as_str().map(str::to_string)))
                     .unwrap_or_default(),
                 ccf_significant: c.ccf.significant,
+                projection_r2: p.map_or(0.0, |p| p.r2),
+                projection_critical: p.map_or(0.0, |p| p.threshold.critical),
+                projection_significant: p.is_some_and(|p| p.significant),
             });
         }
         for (cv, &j) in testable.iter().enumerate() {
-            let flagged: Vec<usize> =
-                m.cells.iter().filter(|c| c.cv == cv && c.significant).map(|c| c.mv).collect();
+            let flagged: Vec<usize> = (0..input.inputs.len())
+                .filter(|&i| {
+                    m.cells.iter().any(|c| c.cv == cv && c.mv == i && c.significant)
+                        || proj(i, cv).is_some_and(|p| p.significant)
+                })
+                .collect();
             if flagged.is_empty() {
                 continue;
             }
-            let ctx = output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split);
-            let inst = instrument_ctx(&ctx, &u_driven);
+            let ctx = &ctxs[cv];
+            let inst = instrument_ctx(ctx, &u_driven);
             let r = &residuals[j];
-            let scoring = scoring_ctxs(&ctx, &u_all, &u_driven);
-            let ranked = select::rank(&ctx, &inst, &scoring, r, &flagged, &split, opts.penalty);
-            let (finding, corr) = decide(&ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
+            let scoring = scoring_ctxs(ctx, &u_all, &u_driven);
+            let ranked =
+                select::rank(ctx, &inst, &scoring, r, &flagged, &split, opts.penalty, opts.projected_scoring);
+            let (finding, corr) = decide(ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
             if let Some(c) = corr {
                 corrected[j].iter_mut().zip(&c).for_each(|(a, b)| *a += b);
             }
@@ -269,7 +305,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         after.insert(y.name.to_string(), fit_pct(&y.values[n_train..], &corrected[j][n_train..]));
     }
     let report = DiagnosisReport {
-        mismatch: matrix.as_ref().is_some_and(|m| m.mismatch),
+        mismatch: matrix.as_ref().is_some_and(|m| m.mismatch) || projection.iter().any(|p| p.significant),
         channels,
         findings,
         holdout: Holdout { start_index: n_train, fit_before_pct: before, fit_after_pct: after },
@@ -381,7 +417,14 @@ pub fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
     let ut: Vec<Vec<f64>> =
         u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
     let s_channel: Vec<Vec<f64>> = (0..ut.len()).map(|i| ctx.model.channel(i, &ut[i])).collect();
-    let mut s = vec![ctx.y0; ctx.s.len()];
+    // The level: the model's output at the operating point, `s − Σ s_ji` (constant for a linear
+    // model; its mean otherwise). Not the median of `s`: with a skewed input (a loop working
+    // against an |x| sensor) the two differ, measured by 0.33 on casebook case c23, which put
+    // every output-side hypothesis (a sensor map, a clip, a fed-back force) at the wrong level.
+    let n = ctx.s.len().max(1) as f64;
+    let level =
+        (0..ctx.s.len()).map(|t| ctx.s[t] - ctx.s_channel.iter().map(|c| c[t]).sum::<f64>()).sum::<f64>() / n;
+    let mut s = vec![level; ctx.s.len()];
     for c in &s_channel {
         s.iter_mut().zip(c).for_each(|(a, b)| *a += b);
     }

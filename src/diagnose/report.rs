@@ -37,9 +37,20 @@ pub struct ChannelReport {
     pub significant: bool,
     /// `mismatch`, `clean` or `implicated_by_feedback`.
     pub verdict: String,
-    /// Whether the linear cross-correlation baseline also sees this channel.
+    /// Whether the linear cross-correlation baseline also sees this channel (any lag beyond the
+    /// family-wise, Bonferroni, limit over the lag range).
     #[serde(default)]
     pub ccf_significant: bool,
+    /// The dither-projection test of this channel ([`super::locate`]): the fraction of the
+    /// whitened residual's variance explained by functions of the dither.
+    #[serde(default)]
+    pub projection_r2: f64,
+    /// Its surrogate critical value.
+    #[serde(default)]
+    pub projection_critical: f64,
+    /// The projection test is significant: the channel is fitted even when the MI is not.
+    #[serde(default)]
+    pub projection_significant: bool,
 }
 
 /// One named piece of left-out physics.

@@ -3,7 +3,7 @@
 //! tail) in simulation mode, with a BIC-style penalty per coefficient and per grid value. The
 //! intercept-only correction is the null hypothesis every term must beat.
 
-use super::candidates::{OutputCtx, Term, grid};
+use super::candidates::{ActsOn, OutputCtx, Term, grid};
 use super::fit::{frols, instrumental};
 use super::simulate::{FittedTerm, correction};
 
@@ -114,6 +114,7 @@ fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
 pub fn score(
     ctx: &OutputCtx,
     inst: Option<&[OutputCtx]>,
+    proj: Option<&Projector>,
     r: &[f64],
     f: Option<FittedTerm>,
     fit_rows: &[usize],
@@ -123,7 +124,7 @@ pub fn score(
     let (c, complexity) = match &f {
         Some(f) => {
             let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
-            let c = match inst {
+            let c = match inst.filter(|_| proj.is_none()) {
                 Some(set) => {
                     // Averaged over the scoring contexts (see `rank`), intercept re-centred on
                     // the fit rows.
@@ -147,7 +148,19 @@ pub fn score(
         }
     };
     let n = validate.len() as f64;
-    let sse: f64 = validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum();
+    let sse: f64 = match proj {
+        // What the dithers explain of the residual after the correction, plus what they cannot
+        // explain of the residual itself (common to every hypothesis).
+        Some(p) => {
+            let e: Vec<f64> = validate.clone().map(|t| r[t] - c[t]).collect();
+            let rv: Vec<f64> = validate.clone().map(|t| r[t]).collect();
+            let pr = p.project(&rv);
+            let orth: f64 = rv.iter().zip(&pr).map(|(a, b)| (a - b).powi(2)).sum();
+            let pe = p.project(&e);
+            orth + pe.iter().map(|v| v * v).sum::<f64>()
+        }
+        None => validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum(),
+    };
     if !sse.is_finite() {
         return None;
     }
@@ -164,6 +177,7 @@ pub fn score(
 /// part. The shift breaks the link to the disturbance now in the residual (so no hypothesis can
 /// win by cancelling it), while the inputs keep their full spread, so a nonlinearity is judged at
 /// the amplitudes the plant saw (the average estimates `E[c(u) | dither]`).
+#[allow(clippy::too_many_arguments)]
 pub fn rank(
     ctx: &OutputCtx,
     inst: &OutputCtx,
@@ -172,17 +186,26 @@ pub fn rank(
     inputs: &[usize],
     split: &Split,
     penalty: f64,
+    projected: bool,
 ) -> Vec<Scored> {
+    // Closed loop, projected scoring: the dither features of the split plus, per input, the
+    // nonlinear functions of its dither-driven response that the candidate classes produce.
+    let projectors: Option<Vec<Projector>> = split.features.as_ref().filter(|_| projected).map(|z| {
+        let mut z = z.clone();
+        z.extend(nonlinear_dither_features(ctx, inst));
+        split.folds.iter().map(|(_, val)| Projector::new(&z, val.clone())).collect()
+    });
     // Each hypothesis: fitted and scored on every fold; its score is the sum over folds.
     let fold_score = |f: Option<&FittedTerm>| -> Option<(f64, f64, usize)> {
         let mut total = (0.0, 0.0, 0);
-        for (fit_rows, val) in &split.folds {
+        for (k, (fit_rows, val)) in split.folds.iter().enumerate() {
             let fitted = match f {
                 Some(f) => Some(fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?),
                 None => None,
             };
             let closed = split.features.is_some().then_some(scoring);
-            let s = score(ctx, closed, r, fitted, fit_rows, val.clone(), penalty)?;
+            let proj = projectors.as_ref().map(|p| &p[k]);
+            let s = score(ctx, closed, proj, r, fitted, fit_rows, val.clone(), penalty)?;
             total = (total.0 + s.score, total.1 + s.sse, s.complexity);
         }
         Some(total)
@@ -192,8 +215,26 @@ pub fn rank(
     if let Some((score, sse, complexity)) = fold_score(None) {
         out.push(Scored { fitted: None, sse, complexity, score });
     }
+    // An output-side effect (a sensor map, an output clip, a force fed back from the output) is a
+    // property of the output, not of one channel: it is tried once, through the flagged input
+    // whose dither-driven response carries the most of this output's variance (its own
+    // actuator). When two channels share their dynamics, the data cannot tell through which one
+    // a fed-back force enters; trying it on every flagged input would let noise pick.
+    let var_of = |x: &[f64]| {
+        let rows = split.train.clone();
+        let m = x[rows.clone()].iter().sum::<f64>() / rows.len().max(1) as f64;
+        x[rows].iter().map(|v| (v - m).powi(2)).sum::<f64>()
+    };
+    let dominant = inputs
+        .iter()
+        .copied()
+        .filter(|&i| ctx.has_channel[i])
+        .max_by(|&a, &b| var_of(&inst.s_channel[a]).total_cmp(&var_of(&inst.s_channel[b])));
     for &i in inputs {
         let mut terms = grid(ctx, i, split.fit.clone());
+        if dominant.is_some_and(|d| d != i) {
+            terms.retain(|t| t.acts_on() == ActsOn::Input);
+        }
         if ctx.has_channel[i] {
             terms.push(Term::Bilinear(Vec::new()));
         }
@@ -207,4 +248,61 @@ pub fn rank(
     }
     out.sort_by(|a, b| a.score.total_cmp(&b.score));
     out
+}
+
+/// The orthogonal projection on the span of some feature columns over a block of rows.
+#[derive(Debug, Clone)]
+pub struct Projector {
+    q: nalgebra::DMatrix<f64>,
+}
+
+impl Projector {
+    /// An orthonormal basis of the features on `rows` (thin SVD; directions with singular values
+    /// below 1e-8 of the largest are dropped, so collinear features cost nothing).
+    pub fn new(features: &[Vec<f64>], rows: std::ops::Range<usize>) -> Self {
+        let n = rows.len();
+        let x = nalgebra::DMatrix::from_fn(n, features.len(), |r, c| features[c][rows.start + r]);
+        let svd = x.svd(true, false);
+        let smax = svd.singular_values.max();
+        let u = svd.u.unwrap_or_else(|| nalgebra::DMatrix::zeros(n, 0));
+        let keep: Vec<usize> =
+            (0..svd.singular_values.len()).filter(|&k| svd.singular_values[k] > 1e-8 * smax).collect();
+        let q = nalgebra::DMatrix::from_fn(n, keep.len(), |r, c| u[(r, keep[c])]);
+        Self { q }
+    }
+
+    /// `P x` for `x` given on the projector's rows.
+    pub fn project(&self, x: &[f64]) -> Vec<f64> {
+        let v = nalgebra::DVector::from_column_slice(x);
+        let coef = self.q.transpose() * v;
+        (&self.q * coef).as_slice().to_vec()
+    }
+}
+
+/// Per input with a model channel, `G0(ud²)`, `G0(ud³)`, `sd²`, `sd³`, `G0(sd³)` of its
+/// dither-driven centred input `ud` and response `sd`; and the square and cube of the whole
+/// dither-driven output (what an output-side map makes of the dither).
+pub fn nonlinear_dither_features(ctx: &OutputCtx, inst: &OutputCtx) -> Vec<Vec<f64>> {
+    let centred = |x: &[f64]| {
+        let m = x.iter().sum::<f64>() / x.len().max(1) as f64;
+        x.iter().map(|v| v - m).collect::<Vec<f64>>()
+    };
+    let pow = |x: &[f64], p: i32| x.iter().map(|v| v.powi(p)).collect::<Vec<f64>>();
+    let mut z = Vec::new();
+    for i in 0..inst.ut.len() {
+        if !ctx.has_channel[i] {
+            continue;
+        }
+        let ud = &inst.ut[i];
+        let sd = centred(&inst.s_channel[i]);
+        z.push(ctx.model.channel(i, &pow(ud, 2)));
+        z.push(ctx.model.channel(i, &pow(ud, 3)));
+        z.push(pow(&sd, 2));
+        z.push(pow(&sd, 3));
+        z.push(ctx.model.channel(i, &pow(&sd, 3)));
+    }
+    let s = centred(&inst.s);
+    z.push(pow(&s, 2));
+    z.push(pow(&s, 3));
+    z
 }
