@@ -1,6 +1,15 @@
 //! Exploration over all casebook scenarios (ignored; run with --ignored --nocapture).
 
-use mpmwatch::diagnose::DiagnoseOptions;
+use mpmwatch::diagnose::{DiagnoseOptions, Scoring};
+
+/// `SCORING=shifted|projected` picks a closed-loop criterion other than the default.
+fn scoring_from_env() -> Scoring {
+    match std::env::var("SCORING").as_deref() {
+        Ok("shifted") => Scoring::Shifted,
+        Ok("projected") => Scoring::Projected,
+        _ => Scoring::Prediction,
+    }
+}
 use mpmwatch::sim::scenarios::{casebook_specs, describe, diagnose_record, run};
 
 #[test]
@@ -15,8 +24,7 @@ fn explore() {
         }
         let rec = run(&spec).unwrap();
         let t = std::time::Instant::now();
-        let opts =
-            DiagnoseOptions { projected_scoring: std::env::var("SHIFTED").is_err(), ..Default::default() };
+        let opts = DiagnoseOptions { scoring: scoring_from_env(), ..Default::default() };
         let d = diagnose_record(&rec, &opts).unwrap();
         let f: Vec<String> = d
             .report
@@ -85,8 +93,7 @@ fn detail() {
             continue;
         }
         let rec = run(&spec).unwrap();
-        let opts =
-            DiagnoseOptions { projected_scoring: std::env::var("SHIFTED").is_err(), ..Default::default() };
+        let opts = DiagnoseOptions { scoring: scoring_from_env(), ..Default::default() };
         let d = diagnose_record(&rec, &opts).unwrap();
         for f in &d.report.findings {
             eprintln!("{} {}→{} {} {:?}", spec.name, f.input, f.output, f.physics.name(), f.parameters);

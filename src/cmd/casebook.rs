@@ -28,6 +28,10 @@ pub struct Args {
     /// Skip the real recordings.
     #[arg(long)]
     simulated_only: bool,
+    /// Run only the simulated cases whose name contains one of these (comma-separated, e.g.
+    /// `c09,abs_sensor`); the rates then cover those cases only.
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<String>,
     /// Skip the simulated cases (only the real recordings).
     #[arg(long, conflicts_with = "simulated_only")]
     real_only: bool,
@@ -37,7 +41,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let fig = args.out.join("figures");
     std::fs::create_dir_all(&fig).with_context(|| format!("creating {}", fig.display()))?;
     let opts = DiagnoseOptions::default();
-    let specs = if args.real_only { Vec::new() } else { casebook_specs(args.n, args.seed) };
+    let mut specs = if args.real_only { Vec::new() } else { casebook_specs(args.n, args.seed) };
+    if !args.only.is_empty() {
+        specs.retain(|s| args.only.iter().any(|o| s.name.contains(o.as_str())));
+    }
     let mut rows = Vec::new();
     let mut md = String::from("# Diagnosis casebook\n\n");
     md.push_str(&format!(

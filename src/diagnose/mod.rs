@@ -39,6 +39,7 @@ pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, Tri
 use crate::detect::{LagChoice, MatrixOptions, MatrixResult, Signal};
 use crate::info::{Lags, SurrogateOptions};
 use candidates::OutputCtx;
+pub use select::Scoring;
 use select::Split;
 
 /// The signals of one diagnosis, all on the time axis `time`.
@@ -74,10 +75,8 @@ pub struct DiagnoseOptions {
     pub min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,
-    /// Closed loop: score hypotheses by the part of the corrected residual the dithers explain
-    /// (projection on dither features, [`select::Projector`]) rather than by evaluating the
-    /// correction on inputs with a shifted disturbance part.
-    pub projected_scoring: bool,
+    /// Closed loop: how hypotheses are scored (default: prediction error, [`Scoring`]).
+    pub scoring: Scoring,
 }
 
 impl Default for DiagnoseOptions {
@@ -90,7 +89,7 @@ impl Default for DiagnoseOptions {
             penalty: 1.0,
             min_gain_pct: 0.5,
             warmup: 20,
-            projected_scoring: false,
+            scoring: Scoring::default(),
         }
     }
 }
@@ -283,9 +282,12 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             let ctx = &ctxs[cv];
             let inst = instrument_ctx(ctx, &u_driven);
             let r = &residuals[j];
-            let scoring = scoring_ctxs(ctx, &u_all, &u_driven);
-            let ranked =
-                select::rank(ctx, &inst, &scoring, r, &flagged, &split, opts.penalty, opts.projected_scoring);
+            let scoring = if opts.scoring == Scoring::Shifted {
+                scoring_ctxs(ctx, &u_all, &u_driven)
+            } else {
+                Vec::new()
+            };
+            let ranked = select::rank(ctx, &inst, &scoring, r, &flagged, &split, opts.penalty, opts.scoring);
             let (finding, corr) = decide(ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
             if let Some(c) = corr {
                 corrected[j].iter_mut().zip(&c).for_each(|(a, b)| *a += b);

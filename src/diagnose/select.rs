@@ -4,8 +4,47 @@
 //! intercept-only correction is the null hypothesis every term must beat.
 
 use super::candidates::{ActsOn, OutputCtx, Term, grid};
-use super::fit::{frols, instrumental};
+use super::fit::{delayed, frols, instrumental, least_squares_rows};
 use super::simulate::{FittedTerm, correction};
+
+/// How hypotheses are scored in a closed loop (open-loop records always use the plain
+/// validation error of the corrected residual).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Scoring {
+    /// One-step prediction error of the corrected residual under an AR noise model fitted on the
+    /// fit rows (the *direct* prediction-error method of closed-loop identification). The
+    /// correction is evaluated on the recorded inputs. Under the true hypothesis the corrected
+    /// residual is the disturbance alone, whose innovation is independent of everything before
+    /// it, the inputs included (they reach the residual through the plant's delay); so no term
+    /// built from the past can lower the expected prediction error below the innovation's, and a
+    /// wrong term adds its dither-driven part on top. Raw squared errors lack this property: a
+    /// wrong correction of inputs that carry the disturbance back can cancel part of it.
+    #[default]
+    Prediction,
+    /// Validation error with the correction evaluated on the dither-driven part of the inputs
+    /// plus circularly shifted copies of their disturbance-driven part (see [`rank`]).
+    Shifted,
+    /// Validation error projected on dither features (a GMM/IV criterion, see [`Projector`]).
+    Projected,
+}
+
+/// AR order of the noise model of [`Scoring::Prediction`]: enough for the slow, coloured
+/// disturbances of process plants (an AR(1) with pole 0.9 needs one lag; a noise model of
+/// moderate order costs the same for every hypothesis, so it does not bias the comparison).
+pub const PREDICTION_ORDER: usize = 8;
+
+/// The criterion one fold is scored with.
+#[derive(Debug, Clone, Copy)]
+pub enum Criterion<'a> {
+    /// Open loop: validation SSE of the corrected residual.
+    Plain,
+    /// [`Scoring::Shifted`] with its scoring contexts.
+    Shifted(&'a [OutputCtx]),
+    /// [`Scoring::Projected`] with the fold's projector.
+    Projected(&'a Projector),
+    /// [`Scoring::Prediction`] with the AR order of the noise model.
+    Prediction(usize),
+}
 
 /// One scored hypothesis.
 #[derive(Debug, Clone, PartialEq)]
@@ -113,8 +152,7 @@ fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
 #[allow(clippy::too_many_arguments)]
 pub fn score(
     ctx: &OutputCtx,
-    inst: Option<&[OutputCtx]>,
-    proj: Option<&Projector>,
+    crit: Criterion<'_>,
     r: &[f64],
     f: Option<FittedTerm>,
     fit_rows: &[usize],
@@ -124,8 +162,8 @@ pub fn score(
     let (c, complexity) = match &f {
         Some(f) => {
             let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
-            let c = match inst.filter(|_| proj.is_none()) {
-                Some(set) => {
+            let c = match crit {
+                Criterion::Shifted(set) => {
                     // Averaged over the scoring contexts (see `rank`), intercept re-centred on
                     // the fit rows.
                     let mut g = f.clone();
@@ -138,7 +176,7 @@ pub fn score(
                     g.intercept = fit_rows.iter().map(|&t| r[t] - c0[t]).sum::<f64>() / fit_rows.len() as f64;
                     c0.iter().map(|v| v + g.intercept).collect()
                 }
-                None => correction(ctx, f)?,
+                _ => correction(ctx, f)?,
             };
             (c, 1 + free + f.term.grid_params())
         }
@@ -148,10 +186,10 @@ pub fn score(
         }
     };
     let n = validate.len() as f64;
-    let sse: f64 = match proj {
+    let sse: f64 = match crit {
         // What the dithers explain of the residual after the correction, plus what they cannot
         // explain of the residual itself (common to every hypothesis).
-        Some(p) => {
+        Criterion::Projected(p) => {
             let e: Vec<f64> = validate.clone().map(|t| r[t] - c[t]).collect();
             let rv: Vec<f64> = validate.clone().map(|t| r[t]).collect();
             let pr = p.project(&rv);
@@ -159,13 +197,39 @@ pub fn score(
             let pe = p.project(&e);
             orth + pe.iter().map(|v| v * v).sum::<f64>()
         }
-        None => validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum(),
+        Criterion::Prediction(order) => {
+            let e: Vec<f64> = r.iter().zip(&c).map(|(a, b)| a - b).collect();
+            prediction_sse(&e, order, fit_rows, validate.clone())?
+        }
+        Criterion::Plain | Criterion::Shifted(_) => validate.clone().map(|t| (r[t] - c[t]).powi(2)).sum(),
     };
     if !sse.is_finite() {
         return None;
     }
     let score = n * (sse / n).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
     Some(Scored { fitted: f, sse, complexity, score })
+}
+
+/// Validation SSE of the one-step prediction of `e` by an AR(`order`) model with a constant,
+/// fitted by least squares on `fit_rows`.
+pub fn prediction_sse(
+    e: &[f64],
+    order: usize,
+    fit_rows: &[usize],
+    validate: std::ops::Range<usize>,
+) -> Option<f64> {
+    let lags: Vec<Vec<f64>> = (1..=order).map(|k| delayed(e, k)).collect();
+    let ones = vec![1.0; e.len()];
+    let mut cols: Vec<&[f64]> = vec![&ones];
+    cols.extend(lags.iter().map(|c| c.as_slice()));
+    let rows: Vec<usize> = fit_rows.iter().copied().filter(|&t| t >= order).collect();
+    let th = least_squares_rows(&cols, e, &rows)?;
+    Some(
+        validate
+            .filter(|&t| t >= order)
+            .map(|t| (e[t] - cols.iter().zip(&th).map(|(c, b)| c[t] * b).sum::<f64>()).powi(2))
+            .sum(),
+    )
 }
 
 /// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
@@ -186,8 +250,9 @@ pub fn rank(
     inputs: &[usize],
     split: &Split,
     penalty: f64,
-    projected: bool,
+    scoring_mode: Scoring,
 ) -> Vec<Scored> {
+    let projected = scoring_mode == Scoring::Projected;
     // Closed loop, projected scoring: the dither features of the split plus, per input, the
     // nonlinear functions of its dither-driven response that the candidate classes produce.
     let projectors: Option<Vec<Projector>> = split.features.as_ref().filter(|_| projected).map(|z| {
@@ -203,9 +268,13 @@ pub fn rank(
                 Some(f) => Some(fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?),
                 None => None,
             };
-            let closed = split.features.is_some().then_some(scoring);
-            let proj = projectors.as_ref().map(|p| &p[k]);
-            let s = score(ctx, closed, proj, r, fitted, fit_rows, val.clone(), penalty)?;
+            let crit = match (&split.features, &projectors, scoring_mode) {
+                (None, _, _) => Criterion::Plain,
+                (Some(_), Some(p), _) => Criterion::Projected(&p[k]),
+                (Some(_), None, Scoring::Prediction) => Criterion::Prediction(PREDICTION_ORDER),
+                (Some(_), None, _) => Criterion::Shifted(scoring),
+            };
+            let s = score(ctx, crit, r, fitted, fit_rows, val.clone(), penalty)?;
             total = (total.0 + s.score, total.1 + s.sse, s.complexity);
         }
         Some(total)
