@@ -1,8 +1,7 @@
 //! Each vocabulary class is recovered (right channel, right physics) on a seeded concealed
 //! closed-loop case of the casebook (3000 samples, seeds 100 + k, the effect's residual variance
-//! 0.1–0.8 of the disturbance's). Classes the method does not yet recover on any casebook case
-//! are kept as ignored tests that name the failure, so the gap stays visible. The cases named
-//! here are the ones the casebook (seeds 100–127) recovers; the casebook reports the others.
+//! 0.1–0.8 of the disturbance's), with the default options (closed-loop hypotheses scored by
+//! prediction error). Every class has a test; the casebook reports the cases not named here.
 
 use mpmwatch::diagnose::DiagnoseOptions;
 use mpmwatch::sim::scenarios::{casebook_specs, diagnose_record, run};
@@ -70,8 +69,7 @@ fn backlash() {
     recovers("c19_");
 }
 
-/// The 2×2 case: flagged by the dither-projection test only (the MI matrix flags nothing); the
-/// SISO case (c21) is named cubic, a weaker odd term of the same sign.
+/// The 2×2 case: flagged by the dither-projection test only (the MI matrix flags nothing).
 #[test]
 fn coulomb_friction() {
     recovers("c22_");
@@ -89,8 +87,15 @@ fn saturation_mimo() {
     recovers("c12_");
 }
 
+/// Needs the prediction-error scoring: the sensor's effect in the residual depends on the
+/// disturbance-driven part of the output, which the shifted scoring scrambled (it named backlash).
 #[test]
-#[ignore = "known failure: c23/c24 are flagged (dither-projection test) but the shifted closed-loop scoring names backlash / an output clip; the projected scoring names abs_sensor and loses four other classes (docs/diagnose.md)"]
 fn abs_sensor() {
     recovers("c23_");
+}
+
+/// The SISO friction case, with a binary dither (the shifted scoring named it cubic).
+#[test]
+fn coulomb_friction_siso() {
+    recovers("c21_");
 }

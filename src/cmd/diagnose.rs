@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use mpmwatch::detect::Signal;
-use mpmwatch::diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, diagnose};
+use mpmwatch::diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Scoring, diagnose};
 use mpmwatch::info::Lags;
 use mpmwatch::io::Table;
 use mpmwatch::report::figures::{XySeries, write_xy_chart};
@@ -51,6 +51,29 @@ pub struct Args {
     /// Write a figure per output (recorded, simulated, corrected) into this folder.
     #[arg(long)]
     figures: Option<PathBuf>,
+    /// How hypotheses are compared in a closed loop (with --excitations). `prediction`: one-step
+    /// prediction error of the corrected residual under an AR noise model (consistent in closed
+    /// loop, the default); `shifted` and `projected`: the two earlier criteria, kept to compare.
+    #[arg(long, value_enum, default_value_t = ScoringArg::Prediction)]
+    scoring: ScoringArg,
+}
+
+/// `--scoring` values (kept out of the library, which has no command-line types).
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ScoringArg {
+    Prediction,
+    Shifted,
+    Projected,
+}
+
+impl From<ScoringArg> for Scoring {
+    fn from(s: ScoringArg) -> Self {
+        match s {
+            ScoringArg::Prediction => Scoring::Prediction,
+            ScoringArg::Shifted => Scoring::Shifted,
+            ScoringArg::Projected => Scoring::Projected,
+        }
+    }
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -124,6 +147,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         surrogates: args.surrogates,
         seed: args.seed,
         lags: Lags::new(1, args.tmax)?,
+        scoring: args.scoring.into(),
         ..DiagnoseOptions::default()
     };
     let dg = diagnose(&input, &opts)?;

@@ -352,8 +352,14 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     for rho in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0] {
         out.push(Term::TimeConstant { p0, p1: (-1.0 / (rho * tau0)).exp() });
     }
-    for cq in [0.3, 0.4, 0.5, 0.6, 0.7] {
-        let centre = quantile(u, cq);
+    // Centres of the symmetric nonlinearities: quantiles of the input, and its mean. The mean
+    // matters under a binary dither: the input is then two clusters (±1 plus the controller's
+    // move) and its median falls anywhere in the gap between them, so no quantile sits at the
+    // operating point (measured: casebook c09, a dead zone named a gain for want of its centre).
+    let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
+    let centres: Vec<f64> =
+        [0.3, 0.4, 0.5, 0.6, 0.7].iter().map(|&q| quantile(u, q)).chain(std::iter::once(mean)).collect();
+    for &centre in &centres {
         let dev: Vec<f64> = u.iter().map(|v| (v - centre).abs()).collect();
         for q in [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8] {
             out.push(Term::DeadZone { centre, w: quantile(&dev, q) });
@@ -362,8 +368,7 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
         out.push(Term::SaturationIn { lo: f64::NEG_INFINITY, hi: quantile(u, q) });
         out.push(Term::SaturationIn { lo: quantile(u, 1.0 - q), hi: f64::INFINITY });
-        for cq in [0.4, 0.5, 0.6] {
-            let c = quantile(u, cq);
+        for &c in centres[1..4].iter().chain([&mean]) {
             let a = quantile(&u.iter().map(|v| (v - c).abs()).collect::<Vec<_>>(), q);
             out.push(Term::SaturationIn { lo: c - a, hi: c + a });
         }

@@ -318,6 +318,13 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             lags: [opts.lags.min, opts.lags.max],
             penalty: opts.penalty,
             sample_time_s: ts,
+            scoring: match (&input.excitations, opts.scoring) {
+                (None, _) => "none",
+                (Some(_), Scoring::Prediction) => "prediction",
+                (Some(_), Scoring::Shifted) => "shifted",
+                (Some(_), Scoring::Projected) => "projected",
+            }
+            .to_string(),
         }),
     };
     Ok(Diagnosis { report, corrected, matrix })

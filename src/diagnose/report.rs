@@ -116,4 +116,8 @@ pub struct Settings {
     pub penalty: f64,
     /// Sample time, seconds.
     pub sample_time_s: f64,
+    /// Closed-loop scoring criterion (`prediction`, `shifted` or `projected`; `none` for an
+    /// open-loop record, scored by the plain validation error).
+    #[serde(default)]
+    pub scoring: String,
 }
