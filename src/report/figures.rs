@@ -390,3 +390,106 @@ fn draw_xy<DB: DrawingBackend>(
         .draw()?;
     Ok(())
 }
+
+/// One item of a before → after chart: a label, the value before and after, and whether the
+/// item counts as a success (a triangle) or not (a cross).
+#[derive(Debug, Clone)]
+pub struct BeforeAfter {
+    /// Short label under the item (e.g. `c09`).
+    pub label: String,
+    /// Value before.
+    pub before: f64,
+    /// Value after.
+    pub after: f64,
+    /// Drawn as a triangle when true, a cross when false.
+    pub success: bool,
+}
+
+/// A before → after chart, as SVG and PNG: one arrow per item from its value before (grey dot)
+/// to its value after (green when it rose, red when it fell; a triangle for a success, a cross
+/// otherwise). Used for the casebook's held-out FIT per case, where a table of 28 pairs of numbers
+/// hides which cases gained and which lost.
+pub fn write_before_after_chart(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    y_label: &str,
+    items: &[BeforeAfter],
+) -> Result<Vec<PathBuf>, FigureError> {
+    ensure_font();
+    std::fs::create_dir_all(dir).map_err(|source| FigureError::Dir { path: dir.to_path_buf(), source })?;
+    let width = (items.len() as u32 * 28 + 140).max(520);
+    let files = svg_and_png!(dir, name, (width, 420), |root| draw_before_after(root, title, y_label, items))?;
+    Ok(files.to_vec())
+}
+
+fn draw_before_after<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    y_label: &str,
+    items: &[BeforeAfter],
+) -> DrawResult<DB> {
+    root.fill(&WHITE)?;
+    let (y0, y1) =
+        bounds(items.iter().flat_map(|i| [i.before, i.after]).filter(|v| v.is_finite()).chain([0.0]));
+    let n = items.len().max(1);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, 16))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(-0.5..(n as f64 - 0.5), y0..y1)?;
+    let labels: Vec<String> = items.iter().map(|i| i.label.clone()).collect();
+    chart
+        .configure_mesh()
+        .x_labels(n)
+        .x_label_formatter(&|x| {
+            let k = x.round();
+            if (x - k).abs() < 1e-6 && k >= 0.0 {
+                labels.get(k as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .y_desc(y_label)
+        .label_style((FONT, 10))
+        .axis_desc_style((FONT, 12))
+        .draw()?;
+    let grey = RGBColor(150, 150, 150);
+    let (up, down) = (RGBColor(44, 160, 44), RGBColor(214, 39, 40));
+    for (k, it) in items.iter().enumerate() {
+        if !(it.before.is_finite() && it.after.is_finite()) {
+            continue;
+        }
+        let x = k as f64;
+        let colour = if it.after >= it.before { up } else { down };
+        chart.draw_series(LineSeries::new([(x, it.before), (x, it.after)], colour.stroke_width(2)))?;
+        chart.draw_series([Circle::new((x, it.before), 4, grey.filled())])?;
+        if it.success {
+            chart.draw_series([TriangleMarker::new((x, it.after), 6, colour.filled())])?;
+        } else {
+            chart.draw_series([Cross::new((x, it.after), 6, colour.stroke_width(2))])?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod before_after_tests {
+    use super::*;
+
+    #[test]
+    fn writes_both_files_with_text() {
+        let dir = std::env::temp_dir().join(format!("mpmwatch-ba-{}", std::process::id()));
+        let items = vec![
+            BeforeAfter { label: "c01".into(), before: 10.0, after: 30.0, success: true },
+            BeforeAfter { label: "c02".into(), before: 20.0, after: 5.0, success: false },
+            BeforeAfter { label: "c03".into(), before: f64::NAN, after: 1.0, success: true },
+        ];
+        let files = write_before_after_chart(&dir, "ba", "held-out FIT", "FIT [%]", &items).unwrap();
+        let svg = std::fs::read_to_string(&files[0]).unwrap();
+        assert!(svg.contains("c02") && svg.contains("held-out FIT"), "labels missing from the SVG");
+        assert!(std::fs::metadata(&files[1]).unwrap().len() > 1000, "PNG suspiciously small");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
