@@ -355,7 +355,8 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     // Centres of the symmetric nonlinearities: quantiles of the input, and its mean. The mean
     // matters under a binary dither: the input is then two clusters (±1 plus the controller's
     // move) and its median falls anywhere in the gap between them, so no quantile sits at the
-    // operating point (measured: casebook c09, a dead zone named a gain for want of its centre).
+    // operating point. (Casebook c09 is still named a gain with it: over two clusters a dead zone
+    // and a gain reduction move the input alike, and the dead zone loses by its penalty.)
     let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
     let centres: Vec<f64> =
         [0.3, 0.4, 0.5, 0.6, 0.7].iter().map(|&q| quantile(u, q)).chain(std::iter::once(mean)).collect();

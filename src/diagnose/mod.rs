@@ -11,9 +11,10 @@
 //!    what says a channel is wrong at all — so a disturbance-only change yields no finding;
 //! 3. the nominal model is identified from the simulation (noise-free, [`nominal`]) so every
 //!    hypothesis can be phrased against the model's own channel dynamics ([`candidates`]);
-//! 4. every hypothesis is fitted on the first 70 % of the training part and scored in simulation
-//!    mode on the rest with a BIC penalty ([`select`]); the winner must beat the
-//!    intercept-only null hypothesis, otherwise the finding is `unexplained`;
+//! 4. every hypothesis is fitted and scored by 3-fold cross-validation within the training part
+//!    with a BIC penalty ([`select`]; closed loop: by one-step prediction error under an AR noise
+//!    model); the winner must beat the intercept-only null hypothesis, otherwise the finding is
+//!    `unexplained`;
 //! 5. the winner is refitted on the whole training part and the corrected simulation
 //!    ([`simulate`]) is scored on the held-out tail.
 
@@ -476,7 +477,7 @@ fn decide(
     let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
     // Open loop: the winner must also raise the plain validation FIT. Closed loop: the plain FIT
     // can fall for the true correction (the nominal error partly cancels the disturbance through
-    // feedback), so the dither-projected score alone decides.
+    // feedback), so the closed-loop criterion (`opts.scoring`) alone decides.
     let best = best
         .filter(|s| split.features.is_some() || val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
     let out_name = input.outputs[j].name;
