@@ -71,6 +71,7 @@ fn silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises() {
         excitations: None,
         outputs: vec![Signal { name: "y", values: &y[w.clone()] }],
         simulated: vec![Signal { name: "y", values: &s[w] }],
+        physical: Vec::new(),
     };
     let d = diagnose(&input, &DiagnoseOptions::default()).unwrap();
     let f = d.report.findings.first().expect("a finding on the Silverbox");

@@ -157,6 +157,7 @@ fn bad_input_names_the_culprit() {
         excitations: None,
         outputs: vec![Signal { name: "y1", values: &x }],
         simulated: vec![Signal { name: "y1", values: &nan }],
+        physical: Vec::new(),
     };
     match diagnose(&input, &DiagnoseOptions::default()) {
         Err(DiagnoseError::NotFinite { name, index, .. }) => assert_eq!((name.as_str(), index), ("y1", 17)),

@@ -310,6 +310,7 @@ fn real_case(
     y: Vec<f64>,
     s: Vec<f64>,
     expected: &str,
+    physical: Option<&dyn mpmwatch::diagnose::PhysicalModel>,
     opts: &DiagnoseOptions,
     fig: &Path,
 ) -> anyhow::Result<RealResult> {
@@ -319,6 +320,7 @@ fn real_case(
         excitations: None,
         outputs: vec![Signal { name: "y", values: &y }],
         simulated: vec![Signal { name: "y", values: &s }],
+        physical: vec![physical],
     };
     let dg = mpmwatch::diagnose::diagnose(&input, opts)?;
     crate::cmd::diagnose::output_figure(
@@ -373,6 +375,7 @@ fn silverbox(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<
         y,
         s,
         "cubic",
+        None,
         opts,
         fig,
     )
@@ -392,7 +395,18 @@ fn ced(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealRe
     let th = arx_fit(&uc, &yc, 3, 3, 1, 0..uc.len());
     let s = arx_run(&th, &u, y[0], 3, 3, 1);
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 0.02).collect();
-    real_case("ced", "linear ARX(3,3) calibrated on DATAUNIF u12→z12", time, u, y, s, "abs_sensor", opts, fig)
+    real_case(
+        "ced",
+        "linear ARX(3,3) calibrated on DATAUNIF u12→z12",
+        time,
+        u,
+        y,
+        s,
+        "abs_sensor",
+        None,
+        opts,
+        fig,
+    )
 }
 
 /// TCLab sine test (heater 1 swept sinusoidally 0–100 %, period 5 min): temperature 1 against a
@@ -403,7 +417,7 @@ fn tclab(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     let (time, u, y) = (column(&h, &c, "Time", &p)?, column(&h, &c, "Q1", &p)?, column(&h, &c, "T1", &p)?);
     let n = time.len();
     let s = arx_simulation(&u, &y, 1, 1, 1, 0..(n * 7 / 10));
-    real_case("tclab", "linear first-order ARX(1,1)", time, u, y, s, "say what it finds", opts, fig)
+    real_case("tclab", "linear first-order ARX(1,1)", time, u, y, s, "say what it finds", None, opts, fig)
 }
 
 /// Cascaded tanks: a Torricelli two-tank simulation without overflow, calibrated on the
@@ -418,11 +432,14 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     // simulation sees) and diagnosed as one 2048-sample record: the validation record is the
     // held-out tail.
     let model = mpmwatch::diagnose::tanks::calibrate(&ue, &ye, 4.0);
-    let s: Vec<f64> = model
-        .simulate_from(&ue, 4.0, ye[0])
-        .into_iter()
-        .chain(model.simulate_from(&uv, 4.0, yv[0]))
-        .collect();
+    // The simulation handed to `diagnose` is the model's own, so that it can re-run the model
+    // with a tank overflowing.
+    let record = mpmwatch::diagnose::tanks::TanksRecord {
+        model,
+        ts: 4.0,
+        runs: vec![(ue.clone(), ye[0]), (uv.clone(), yv[0])],
+    };
+    let s = mpmwatch::diagnose::PhysicalModel::simulate(&record);
     let u: Vec<f64> = ue.iter().chain(&uv).copied().collect();
     let y: Vec<f64> = ye.iter().chain(&yv).copied().collect();
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();
@@ -433,5 +450,16 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
         holdout_fraction: 0.45,
         ..opts.clone()
     };
-    real_case("cascaded_tanks", "Torricelli two tanks, no overflow", time, u, y, s, "saturation", &opts, fig)
+    real_case(
+        "cascaded_tanks",
+        "Torricelli two tanks, no overflow",
+        time,
+        u,
+        y,
+        s,
+        "saturation",
+        Some(&record),
+        &opts,
+        fig,
+    )
 }

@@ -141,6 +141,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         excitations: if ds.is_empty() { None } else { Some(view(&ds)) },
         outputs: view(&ys),
         simulated: view(&ss),
+        physical: Vec::new(),
     };
     let opts = DiagnoseOptions {
         holdout_fraction: args.holdout_fraction,

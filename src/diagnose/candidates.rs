@@ -86,7 +86,8 @@ impl Physics {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ActsOn {
-    /// On the manipulated variable before the model's dynamics.
+    /// On the manipulated variable before the model's dynamics (or, for a state limit of a
+    /// physical model, on a state between the input and the measured output).
     Input,
     /// On the output (a sensor, a clip, or a force fed back from the output).
     Output,
@@ -125,6 +126,12 @@ pub enum Term {
     Coulomb { on_change: bool },
     /// The sensor reads `|x − o| + o`.
     AbsSensor(f64),
+    /// A state of a physical nominal model never rises above `level`; the fraction `spill` of
+    /// what overflows flows on to the next state (an overflowing tank; see [`super::physical`]).
+    /// Its column is the re-run model's output minus the nominal simulation, precomputed in
+    /// [`OutputCtx::limited`]. `measured`: the state is the measured output itself (the limit
+    /// then acts on the output, otherwise on the way from the input to it).
+    StateLimit { state: usize, level: f64, spill: f64, measured: bool },
 }
 
 impl Term {
@@ -136,7 +143,9 @@ impl Term {
             Term::TimeConstant { .. } => Physics::TimeConstant,
             Term::MissingCoupling { .. } => Physics::MissingCoupling,
             Term::DeadZone { .. } => Physics::DeadZone,
-            Term::SaturationIn { .. } | Term::SaturationOut { .. } => Physics::Saturation,
+            Term::SaturationIn { .. } | Term::SaturationOut { .. } | Term::StateLimit { .. } => {
+                Physics::Saturation
+            }
             Term::Quadratic => Physics::Quadratic,
             Term::Cubic | Term::CubicOut => Physics::Cubic,
             Term::Bilinear(_) => Physics::Bilinear,
@@ -149,9 +158,11 @@ impl Term {
     /// Where it acts.
     pub fn acts_on(&self) -> ActsOn {
         match self {
-            Term::SaturationOut { .. } | Term::CubicOut | Term::Coulomb { .. } | Term::AbsSensor(_) => {
-                ActsOn::Output
-            }
+            Term::SaturationOut { .. }
+            | Term::CubicOut
+            | Term::Coulomb { .. }
+            | Term::AbsSensor(_)
+            | Term::StateLimit { measured: true, .. } => ActsOn::Output,
             _ => ActsOn::Input,
         }
     }
@@ -160,7 +171,7 @@ impl Term {
     pub fn grid_params(&self) -> usize {
         match self {
             Term::Gain | Term::Quadratic | Term::Cubic | Term::CubicOut => 0,
-            Term::MissingCoupling { .. } | Term::DeadZone { .. } => 2,
+            Term::MissingCoupling { .. } | Term::DeadZone { .. } | Term::StateLimit { .. } => 2,
             Term::SaturationIn { lo, hi } | Term::SaturationOut { lo, hi } => {
                 usize::from(lo.is_finite()) + usize::from(hi.is_finite())
             }
@@ -183,6 +194,7 @@ impl Term {
                 | Term::SaturationOut { .. }
                 | Term::Backlash(_)
                 | Term::AbsSensor(_)
+                | Term::StateLimit { .. }
         )
     }
 
@@ -211,6 +223,11 @@ pub struct OutputCtx {
     pub has_channel: Vec<bool>,
     /// Per input: `s_ji`, the model's response to the centred input.
     pub s_channel: Vec<Vec<f64>>,
+    /// With a physical nominal model: every state-limit hypothesis and its correction (see
+    /// [`super::physical::limit_terms`]); empty otherwise.
+    pub limited: Vec<(Term, Vec<f64>)>,
+    /// With a physical nominal model: the name of each of its states.
+    pub state_names: Vec<String>,
 }
 
 impl OutputCtx {
@@ -262,6 +279,9 @@ impl OutputCtx {
             }
             Term::Coulomb { on_change } => vec![g0(&coulomb_input(&self.y, *on_change))],
             Term::AbsSensor(o) => vec![self.s.iter().map(|v| (v - o).abs() + o - v).collect()],
+            Term::StateLimit { .. } => {
+                self.limited.iter().filter(|(t, _)| t == term).map(|(_, c)| c.clone()).take(1).collect()
+            }
         }
     }
 

@@ -167,6 +167,23 @@ pub fn describe(
                 fmt(*o)
             )
         }
+        Term::StateLimit { state, level, spill, measured } => {
+            let name = ctx.state_names.get(*state).cloned().unwrap_or_else(|| format!("state {state}"));
+            p.insert("state_index".into(), *state as f64);
+            p.insert("level".into(), *level);
+            let mut s = format!(
+                "the model's {name} cannot rise above {} (an overflow the model leaves out)",
+                fmt(*level)
+            );
+            if !measured {
+                p.insert("spill_fraction".into(), *spill);
+                s.push_str(&format!(
+                    "; {:.0} % of what overflows reaches the next stage on the way to {output}",
+                    100.0 * spill
+                ));
+            }
+            s
+        }
     };
     p.insert("intercept".into(), f.intercept);
     (s, p)

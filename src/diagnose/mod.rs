@@ -25,6 +25,7 @@ pub mod fit;
 pub mod fitness;
 pub mod locate;
 pub mod nominal;
+pub mod physical;
 pub mod report;
 pub mod select;
 pub mod simulate;
@@ -35,7 +36,8 @@ use std::collections::BTreeMap;
 pub use candidates::{ActsOn, Physics};
 pub use error::DiagnoseError;
 pub use fitness::fit_pct;
-pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, Tried};
+pub use physical::PhysicalModel;
+pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
 
 use crate::detect::{LagChoice, MatrixOptions, MatrixResult, Signal};
 use crate::info::{Lags, SurrogateOptions};
@@ -57,6 +59,10 @@ pub struct DiagnoseInput<'a> {
     pub outputs: Vec<Signal<'a>>,
     /// The simulation of each output (same order), driven by the recorded inputs.
     pub simulated: Vec<Signal<'a>>,
+    /// Per output (same order), the physical model behind its simulation when the caller has
+    /// one: limits on the model's states are then tried too ([`physical`]). Empty: none. Open
+    /// loop only.
+    pub physical: Vec<Option<&'a dyn PhysicalModel>>,
 }
 
 /// Options of a diagnosis.
@@ -150,6 +156,37 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     for s in input.inputs.iter().chain(&exc).chain(&input.outputs).chain(&input.simulated) {
         check(input.time, s)?;
     }
+    if !input.physical.is_empty() {
+        if input.physical.len() != input.outputs.len() {
+            return Err(DiagnoseError::invalid(
+                "physical models",
+                format!("{} entries for {} outputs", input.physical.len(), input.outputs.len()),
+            ));
+        }
+        if input.excitations.is_some() && input.physical.iter().any(Option::is_some) {
+            return Err(DiagnoseError::invalid(
+                "physical models",
+                "state limits are tested on open-loop records only (no excitations)",
+            ));
+        }
+        for (j, m) in input.physical.iter().enumerate() {
+            let Some(m) = m else { continue };
+            let sim = m.simulate();
+            let s = input.simulated[j].values;
+            let scale = 1.0 + s.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let gap = sim.iter().zip(s).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            if sim.len() != s.len() || gap > 1e-9 * scale {
+                return Err(DiagnoseError::invalid(
+                    "physical models",
+                    format!(
+                        "the model of output {} does not reproduce its simulation ({} samples, largest difference {gap:.3e})",
+                        input.outputs[j].name,
+                        sim.len()
+                    ),
+                ));
+            }
+        }
+    }
     if !(0.05..=0.8).contains(&opts.holdout_fraction) {
         return Err(DiagnoseError::invalid(
             "holdout fraction",
@@ -224,10 +261,34 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     };
     // The context (nominal model, channels) of every testable output, and the dither-projection
     // test of every element (see `locate`): a second way for a channel to be flagged.
-    let ctxs: Vec<OutputCtx> = testable
+    let mut ctxs: Vec<OutputCtx> = testable
         .iter()
         .map(|&j| output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split))
         .collect();
+    // State limits of a physical model, and their locating test, per testable output.
+    let mut limit_tests: Vec<Option<physical::LimitTest>> = vec![None; testable.len()];
+    let mut states = Vec::new();
+    for (cv, &j) in testable.iter().enumerate() {
+        let Some(m) = input.physical.get(j).copied().flatten() else { continue };
+        ctxs[cv].limited = physical::limit_terms(m, split.train.clone());
+        ctxs[cv].state_names = m.state_names();
+        limit_tests[cv] = physical::limit_test(
+            &residuals[j],
+            &ctxs[cv].limited,
+            split.train.clone(),
+            locate::ProjectionOptions::default().z,
+        );
+        if let Some(t) = &limit_tests[cv] {
+            states.push(StateReport {
+                output: input.outputs[j].name.to_string(),
+                states: ctxs[cv].state_names.clone(),
+                hypotheses: ctxs[cv].limited.len(),
+                r2: t.r2,
+                critical: t.threshold.critical,
+                significant: t.significant,
+            });
+        }
+    }
     let projection = if testable.is_empty() {
         Vec::new()
     } else {
@@ -277,7 +338,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                         || proj(i, cv).is_some_and(|p| p.significant)
                 })
                 .collect();
-            if flagged.is_empty() {
+            let limits = limit_tests[cv].as_ref().is_some_and(|t| t.significant);
+            if flagged.is_empty() && !limits {
                 continue;
             }
             let ctx = &ctxs[cv];
@@ -288,7 +350,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             } else {
                 Vec::new()
             };
-            let ranked = select::rank(ctx, &inst, &scoring, r, &flagged, &split, opts.penalty, opts.scoring);
+            let ranked =
+                select::rank(ctx, &inst, &scoring, r, &flagged, limits, &split, opts.penalty, opts.scoring);
             let (finding, corr) = decide(ctx, &inst, r, &ranked, &flagged, &split, opts, ts, input, j);
             if let Some(c) = corr {
                 corrected[j].iter_mut().zip(&c).for_each(|(a, b)| *a += b);
@@ -308,7 +371,9 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         after.insert(y.name.to_string(), fit_pct(&y.values[n_train..], &corrected[j][n_train..]));
     }
     let report = DiagnosisReport {
-        mismatch: matrix.as_ref().is_some_and(|m| m.mismatch) || projection.iter().any(|p| p.significant),
+        mismatch: matrix.as_ref().is_some_and(|m| m.mismatch)
+            || projection.iter().any(|p| p.significant)
+            || states.iter().any(|s| s.significant),
         channels,
         findings,
         holdout: Holdout { start_index: n_train, fit_before_pct: before, fit_after_pct: after },
@@ -327,6 +392,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             }
             .to_string(),
         }),
+        states,
     };
     Ok(Diagnosis { report, corrected, matrix })
 }
@@ -360,6 +426,8 @@ pub fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCt
         model,
         has_channel,
         s_channel,
+        limited: Vec::new(),
+        state_names: Vec::new(),
     }
 }
 
@@ -503,7 +571,11 @@ fn decide(
             return (finding, Some(c));
         }
     }
-    let names: Vec<&str> = flagged.iter().map(|&i| input.inputs[i].name).collect();
+    let mut names: Vec<&str> = flagged.iter().map(|&i| input.inputs[i].name).collect();
+    if !ctx.limited.is_empty() && flagged.is_empty() {
+        // Only the state-limit test flagged this output: the inputs as a whole drive it.
+        names = input.inputs.iter().map(|u| u.name).collect();
+    }
     let classes: Vec<&str> = tried.iter().map(|t| t.physics.name()).collect();
     let finding = Finding {
         input: names.first().copied().unwrap_or("").to_string(),

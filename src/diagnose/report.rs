@@ -20,6 +20,27 @@ pub struct DiagnosisReport {
     /// How the diagnosis was made (seed, surrogates, split, penalty): for reproduction.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settings: Option<Settings>,
+    /// With a physical nominal model: the locating test of its state limits, per output
+    /// ([`super::physical`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub states: Vec<StateReport>,
+}
+
+/// The state-limit locating test of one output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateReport {
+    /// Output name.
+    pub output: String,
+    /// The physical model's states that were tried.
+    pub states: Vec<String>,
+    /// Number of limit hypotheses.
+    pub hypotheses: usize,
+    /// The largest fraction of the whitened residual's variance one hypothesis explains.
+    pub r2: f64,
+    /// Its surrogate critical value.
+    pub critical: f64,
+    /// Above the critical value: the limits are fitted.
+    pub significant: bool,
 }
 
 /// One MV→CV channel of the MI matrix.

@@ -243,7 +243,8 @@ pub fn prediction_sse(
     Some((sse, used.len()))
 }
 
-/// Every hypothesis on the given inputs of one output, scored; the null hypothesis first.
+/// Every hypothesis on the given inputs of one output (and, when `limits`, every state limit of
+/// its physical model), scored; the null hypothesis first.
 ///
 /// Each is scored by 3-fold cross-validation within the training part (see [`score`]).
 ///
@@ -259,6 +260,7 @@ pub fn rank(
     scoring: &[OutputCtx],
     r: &[f64],
     inputs: &[usize],
+    limits: bool,
     split: &Split,
     penalty: f64,
     scoring_mode: Scoring,
@@ -321,6 +323,18 @@ pub fn rank(
         for t in terms {
             // The bilinear products are chosen once by FROLS on the fit rows, then kept fixed.
             let Some(f) = fit_term(ctx, inst, r, i, t, &fit_rows) else { continue };
+            if let Some((score, sse, complexity)) = fold_score(Some(&f)) {
+                out.push(Scored { fitted: Some(f), sse, complexity, score });
+            }
+        }
+    }
+    if limits {
+        // A state limit of the physical model: attributed to the first flagged input (to the
+        // first input when only the state test flagged), since the model, not a channel,
+        // carries it.
+        let i = inputs.first().copied().unwrap_or(0);
+        for (t, _) in &ctx.limited {
+            let Some(f) = fit_term(ctx, inst, r, i, t.clone(), &fit_rows) else { continue };
             if let Some((score, sse, complexity)) = fold_score(Some(&f)) {
                 out.push(Scored { fitted: Some(f), sse, complexity, score });
             }

@@ -2,6 +2,8 @@
 //! outflow ∝ √level) that leaves the upper tank's overflow out, and its calibration on samples
 //! where the measured level stays below the overflow/clip region. Pure.
 
+use super::physical::PhysicalModel;
+
 /// Parameters: `dh1/dt = −k1√h1 + k4·u`, `dh2/dt = k2√h1 − k3√h2`, `y = h2 + offset`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TwoTanks {
@@ -24,30 +26,135 @@ impl TwoTanks {
         let u0 = u.first().copied().unwrap_or(0.0).max(0.0);
         let h1 = (self.k4 * u0 / self.k1).powi(2);
         let h2 = (self.k2 * h1.sqrt() / self.k3).powi(2);
-        self.run(u, ts, h1, h2)
+        self.run(u, ts, [h1, h2], None).0
     }
 
     /// Simulates started at a measured lower-tank level `y0`, the upper tank at the level that
     /// holds the lower one steady (`k2√h1 = k3√h2`).
     pub fn simulate_from(&self, u: &[f64], ts: f64, y0: f64) -> Vec<f64> {
-        let h2 = (y0 - self.offset).max(0.0);
-        let h1 = (self.k3 * h2.sqrt() / self.k2).powi(2);
-        self.run(u, ts, h1, h2)
+        self.run(u, ts, self.start_from(y0), None).0
     }
 
-    fn run(&self, u: &[f64], ts: f64, mut h1: f64, mut h2: f64) -> Vec<f64> {
+    /// As [`TwoTanks::simulate_from`], with one tank overflowing (`None`: as the nominal model),
+    /// and the levels `[h1, h2]` at every sample as well as the output.
+    pub fn simulate_overflowing(
+        &self,
+        u: &[f64],
+        ts: f64,
+        y0: f64,
+        overflow: Option<Overflow>,
+    ) -> (Vec<f64>, Vec<[f64; 2]>) {
+        self.run(u, ts, self.start_from(y0), overflow)
+    }
+
+    fn start_from(&self, y0: f64) -> [f64; 2] {
+        let h2 = (y0 - self.offset).max(0.0);
+        [(self.k3 * h2.sqrt() / self.k2).powi(2), h2]
+    }
+
+    fn run(&self, u: &[f64], ts: f64, h: [f64; 2], overflow: Option<Overflow>) -> (Vec<f64>, Vec<[f64; 2]>) {
         let dt = ts / 16.0;
-        u.iter()
+        let [mut h1, mut h2] = h;
+        // The tank's own level cannot start above its rim.
+        match overflow {
+            Some(Overflow { tank: 0, level, .. }) => h1 = h1.min(level),
+            Some(Overflow { level, .. }) => h2 = h2.min(level),
+            None => {}
+        }
+        let mut levels = Vec::with_capacity(u.len());
+        let y = u
+            .iter()
             .map(|&v| {
+                levels.push([h1, h2]);
                 let y = h2 + self.offset;
                 for _ in 0..16 {
                     let q1 = self.k1 * h1.max(0.0).sqrt();
                     h1 = (h1 + dt * (-q1 + self.k4 * v)).max(0.0);
-                    h2 = (h2 + dt * (self.k2 * h1.sqrt() - self.k3 * h2.max(0.0).sqrt())).max(0.0);
+                    // Water above the upper tank's rim leaves it at once; the fraction `spill`
+                    // of its volume falls into the lower tank, whose level it raises by the
+                    // ratio of the cross-sections, A1/A2 = k2/k1 (the same orifice flow
+                    // lowers h1 by q/A1 and raises h2 by q/A2).
+                    let mut spilled = 0.0;
+                    if let Some(Overflow { tank: 0, level, spill }) = overflow {
+                        let over = (h1 - level).max(0.0);
+                        h1 -= over;
+                        spilled = spill * over * self.k2 / self.k1;
+                    }
+                    h2 = (h2 + dt * (self.k2 * h1.sqrt() - self.k3 * h2.max(0.0).sqrt()) + spilled).max(0.0);
+                    if let Some(Overflow { tank: 1, level, .. }) = overflow {
+                        h2 = h2.min(level);
+                    }
                 }
                 y
             })
-            .collect()
+            .collect();
+        (y, levels)
+    }
+}
+
+/// One tank overflowing: its level never rises above `level`; a fraction `spill` of the water
+/// that overflows the upper tank (`tank` 0) falls into the lower one (`tank` 1), whatever
+/// overflows the lower tank is lost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Overflow {
+    /// 0: upper tank, 1: lower tank.
+    pub tank: usize,
+    /// The rim, in level units of the model.
+    pub level: f64,
+    /// Fraction of the upper tank's overflow that reaches the lower tank.
+    pub spill: f64,
+}
+
+/// The Torricelli simulation of a record made of one or more runs (each started from its own
+/// measured lower-tank level), as a [`PhysicalModel`]: `diagnose` can re-run it with a tank
+/// overflowing.
+#[derive(Debug, Clone)]
+pub struct TanksRecord {
+    /// The calibrated model.
+    pub model: TwoTanks,
+    /// Sample time, seconds.
+    pub ts: f64,
+    /// Each run: its pump voltages and its measured initial level.
+    pub runs: Vec<(Vec<f64>, f64)>,
+}
+
+impl TanksRecord {
+    fn simulate_with(&self, overflow: Option<Overflow>) -> (Vec<f64>, Vec<[f64; 2]>) {
+        let mut y = Vec::new();
+        let mut h = Vec::new();
+        for (u, y0) in &self.runs {
+            let (a, b) = self.model.simulate_overflowing(u, self.ts, *y0, overflow);
+            y.extend(a);
+            h.extend(b);
+        }
+        (y, h)
+    }
+}
+
+impl PhysicalModel for TanksRecord {
+    fn state_names(&self) -> Vec<String> {
+        vec!["upper tank level".into(), "lower tank level".into()]
+    }
+
+    fn simulate(&self) -> Vec<f64> {
+        self.simulate_with(None).0
+    }
+
+    fn state_trajectories(&self) -> Vec<Vec<f64>> {
+        let h = self.simulate_with(None).1;
+        (0..2).map(|k| h.iter().map(|x| x[k]).collect()).collect()
+    }
+
+    fn can_spill(&self, state: usize) -> bool {
+        state == 0
+    }
+
+    fn is_measured(&self, state: usize) -> bool {
+        state == 1
+    }
+
+    fn simulate_limited(&self, state: usize, level: f64, spill: f64) -> Vec<f64> {
+        self.simulate_with(Some(Overflow { tank: state, level, spill })).0
     }
 }
 

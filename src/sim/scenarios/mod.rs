@@ -476,6 +476,7 @@ pub fn diagnose_record(
         excitations: Some(sig(&dn, &rec.d)),
         outputs: sig(&yn, &rec.y),
         simulated: sig(&yn, &rec.s),
+        physical: Vec::new(),
     };
     crate::diagnose::diagnose(&input, opts)
 }
