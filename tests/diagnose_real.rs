@@ -79,3 +79,50 @@ fn silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises() {
     let (before, after) = (d.report.holdout.fit_before_pct["y"], d.report.holdout.fit_after_pct["y"]);
     assert!(after - before >= 5.0, "held-out FIT {before:.1} → {after:.1}");
 }
+
+/// The cascaded tanks against the Torricelli two-tank model without overflow, calibrated on the
+/// estimation record's overflow-free runs, the model itself handed to `diagnose` (state limits,
+/// `diagnose::physical`): the upper tank's overflow must be named (a saturation of state 0) and
+/// the held-out FIT (the validation record but its first 102 samples) must rise by ≥ 5 points.
+#[test]
+fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
+    use mpmwatch::diagnose::PhysicalModel;
+    use mpmwatch::diagnose::tanks::{TanksRecord, calibrate};
+    let path = data_dir().join("cascaded_tanks/dataBenchmark.csv");
+    if !path.exists() {
+        eprintln!(
+            "SKIPPED cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises: {} not \
+             found (set MPMWATCH_DATA to the shared data folder); nothing was checked",
+            path.display()
+        );
+        return;
+    }
+    let cols = read_columns(&path, &["uEst", "uVal", "yEst", "yVal"]);
+    let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
+    let model = calibrate(ue, ye, 4.0);
+    let record = TanksRecord { model, ts: 4.0, runs: vec![(ue.clone(), ye[0]), (uv.clone(), yv[0])] };
+    let s = record.simulate();
+    let u: Vec<f64> = ue.iter().chain(uv).copied().collect();
+    let y: Vec<f64> = ye.iter().chain(yv).copied().collect();
+    let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();
+    let input = DiagnoseInput {
+        time: &time,
+        inputs: vec![Signal { name: "u", values: &u }],
+        excitations: None,
+        outputs: vec![Signal { name: "y", values: &y }],
+        simulated: vec![Signal { name: "y", values: &s }],
+        physical: vec![Some(&record)],
+    };
+    // The casebook's settings for this record.
+    let opts = DiagnoseOptions {
+        lags: mpmwatch::info::Lags { min: 1, max: 40 },
+        holdout_fraction: 0.45,
+        ..DiagnoseOptions::default()
+    };
+    let d = diagnose(&input, &opts).unwrap();
+    let f = d.report.findings.first().expect("a finding on the cascaded tanks");
+    assert_eq!(f.physics, Physics::Saturation, "{}", f.summary);
+    assert_eq!(f.parameters.get("state_index"), Some(&0.0), "{}", f.summary);
+    let (before, after) = (d.report.holdout.fit_before_pct["y"], d.report.holdout.fit_after_pct["y"]);
+    assert!(after - before >= 5.0, "held-out FIT {before:.1} → {after:.1}");
+}

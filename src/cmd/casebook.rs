@@ -427,7 +427,7 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     let (h, c) = read_plain(&p)?;
     let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
     let (uv, yv) = (column(&h, &c, "uVal", &p)?, column(&h, &c, "yVal", &p)?);
-    // Calibrated on the estimation record's longest overflow-free run, then both records
+    // Calibrated on the estimation record's overflow-free runs, then both records
     // simulated (each from its own measured initial level, the only recorded output the
     // simulation sees) and diagnosed as one 2048-sample record: the validation record is the
     // held-out tail.

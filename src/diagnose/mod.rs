@@ -17,6 +17,10 @@
 //!    `unexplained`;
 //! 5. the winner is refitted on the whole training part and the corrected simulation
 //!    ([`simulate`]) is scored on the held-out tail.
+//!
+//! When the caller hands over the physical model behind a simulation ([`PhysicalModel`], open
+//! loop only), limits on the model's states (an overflow) are hypotheses too: each is the model
+//! re-run with the limit, it has its own locating test, and it competes in step 4 ([`physical`]).
 
 pub mod candidates;
 pub mod describe;
