@@ -1,7 +1,8 @@
 //! State limits of a physical nominal model ([`mpmwatch::diagnose::physical`]): a simulated
 //! two-tank plant whose upper tank overflows, diagnosed against the same Torricelli model without
 //! the overflow, must be named a saturation of the upper tank at about the true rim; the same
-//! plant without overflow, its output buried in slow coloured noise, must yield no finding.
+//! plant without overflow, its output buried in slow coloured noise, must yield no finding; and
+//! a plant whose pump is weaker than modelled must be named a gain, not an overflow.
 //!
 //! The plant: the tank coefficients of the cascaded-tanks benchmark's calibration (rounded), a
 //! pump voltage held at random levels in 0.5–6.5 V (the benchmark's range) for 30–90 samples of
@@ -125,4 +126,28 @@ fn a_tank_without_overflow_in_coloured_noise_yields_no_finding() {
     eprintln!("{:?}; {:?}", d.report.states, d.report.channels);
     assert!(d.report.findings.is_empty(), "{:?}", d.report.findings);
     assert!(!d.report.states[0].significant, "{:?}", d.report.states);
+}
+
+/// A wrong pump coefficient (the plant's pump 20 % weaker) and no overflow: the residual depends
+/// on the input, so the state-limit test may fire (a lower level everywhere correlates with a
+/// clipped one), but a limit must not be what is named: every class competes with the limits on
+/// the same cross-validated score. Before the actuator gain was stated through the model, the
+/// generic classes (through the linear nominal) named this a dead zone.
+#[test]
+fn a_weaker_pump_is_not_named_an_overflow() {
+    let u = staircase(51);
+    let record = TanksRecord { model: MODEL, ts: TS, runs: vec![(u.clone(), 3.0)] };
+    let plant = TwoTanks { k4: 0.8 * MODEL.k4, ..MODEL };
+    let (y0, _) = plant.simulate_overflowing(&u, TS, 3.0, None);
+    let noise = ar1(52, 0.9, 0.05);
+    let y: Vec<f64> = y0.iter().zip(&noise).map(|(a, b)| a + b).collect();
+    let d = run(&y, &u, &record);
+    eprintln!("{:?}; {:?}", d.report.states, d.report.findings.first().map(|f| (&f.summary, &f.tried)));
+    let f = d.report.findings.first().expect("a finding");
+    assert!(!f.parameters.contains_key("state_index"), "{}", f.summary);
+    // Stated through the model, the gain is exact: 0.8 is on the grid of ratios, and the noise
+    // (a hundredth of the level's range) is far below the step to the next ratios (0.7, 0.9:
+    // a 12 % change of the steady upper level).
+    assert_eq!(f.physics, Physics::Gain, "{}", f.summary);
+    assert_eq!(f.parameters.get("gain_ratio"), Some(&0.8), "{}", f.summary);
 }

@@ -129,16 +129,19 @@ pub enum Term {
     /// A state of a physical nominal model never rises above `level`; the fraction `spill` of
     /// what overflows flows on to the next state (an overflowing tank; see [`super::physical`]).
     /// Its column is the re-run model's output minus the nominal simulation, precomputed in
-    /// [`OutputCtx::limited`]. `measured`: the state is the measured output itself (the limit
+    /// [`OutputCtx::physical_terms`]. `measured`: the state is the measured output itself (the limit
     /// then acts on the output, otherwise on the way from the input to it).
     StateLimit { state: usize, level: f64, spill: f64, measured: bool },
+    /// Input `input` reaches a physical nominal model multiplied by `ratio` (an actuator whose
+    /// gain is off), stated by re-running the model; precomputed like [`Term::StateLimit`].
+    ModelGain { input: usize, ratio: f64 },
 }
 
 impl Term {
     /// Its vocabulary class.
     pub fn physics(&self) -> Physics {
         match self {
-            Term::Gain => Physics::Gain,
+            Term::Gain | Term::ModelGain { .. } => Physics::Gain,
             Term::DeadTime(_) => Physics::DeadTime,
             Term::TimeConstant { .. } => Physics::TimeConstant,
             Term::MissingCoupling { .. } => Physics::MissingCoupling,
@@ -172,6 +175,7 @@ impl Term {
         match self {
             Term::Gain | Term::Quadratic | Term::Cubic | Term::CubicOut => 0,
             Term::MissingCoupling { .. } | Term::DeadZone { .. } | Term::StateLimit { .. } => 2,
+            Term::ModelGain { .. } => 1,
             Term::SaturationIn { lo, hi } | Term::SaturationOut { lo, hi } => {
                 usize::from(lo.is_finite()) + usize::from(hi.is_finite())
             }
@@ -195,6 +199,7 @@ impl Term {
                 | Term::Backlash(_)
                 | Term::AbsSensor(_)
                 | Term::StateLimit { .. }
+                | Term::ModelGain { .. }
         )
     }
 
@@ -223,9 +228,9 @@ pub struct OutputCtx {
     pub has_channel: Vec<bool>,
     /// Per input: `s_ji`, the model's response to the centred input.
     pub s_channel: Vec<Vec<f64>>,
-    /// With a physical nominal model: every state-limit hypothesis and its correction (see
-    /// [`super::physical::limit_terms`]); empty otherwise.
-    pub limited: Vec<(Term, Vec<f64>)>,
+    /// With a physical nominal model: every hypothesis stated by re-running it (state limits,
+    /// actuator gains) and its correction (see [`super::physical`]); empty otherwise.
+    pub physical_terms: Vec<(Term, Vec<f64>)>,
     /// With a physical nominal model: the name of each of its states.
     pub state_names: Vec<String>,
 }
@@ -279,9 +284,13 @@ impl OutputCtx {
             }
             Term::Coulomb { on_change } => vec![g0(&coulomb_input(&self.y, *on_change))],
             Term::AbsSensor(o) => vec![self.s.iter().map(|v| (v - o).abs() + o - v).collect()],
-            Term::StateLimit { .. } => {
-                self.limited.iter().filter(|(t, _)| t == term).map(|(_, c)| c.clone()).take(1).collect()
-            }
+            Term::StateLimit { .. } | Term::ModelGain { .. } => self
+                .physical_terms
+                .iter()
+                .filter(|(t, _)| t == term)
+                .map(|(_, c)| c.clone())
+                .take(1)
+                .collect(),
         }
     }
 

@@ -184,6 +184,12 @@ pub fn describe(
             }
             s
         }
+        Term::ModelGain { ratio, .. } => {
+            p.insert("gain_ratio".into(), *ratio);
+            format!(
+                "{input} acts on the model {ratio:.2}× as strongly as modelled (an actuator gain, stated through the physical model)"
+            )
+        }
     };
     p.insert("intercept".into(), f.intercept);
     (s, p)

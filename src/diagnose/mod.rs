@@ -274,19 +274,25 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut states = Vec::new();
     for (cv, &j) in testable.iter().enumerate() {
         let Some(m) = input.physical.get(j).copied().flatten() else { continue };
-        ctxs[cv].limited = physical::limit_terms(m, split.train.clone());
-        ctxs[cv].state_names = m.state_names();
+        let limits = physical::limit_terms(m, split.train.clone());
         limit_tests[cv] = physical::limit_test(
             &residuals[j],
-            &ctxs[cv].limited,
+            &limits,
             split.train.clone(),
             locate::ProjectionOptions::default().z,
         );
+        ctxs[cv].state_names = m.state_names();
+        ctxs[cv].physical_terms = limits;
+        ctxs[cv].physical_terms.extend(physical::gain_terms(m, input.inputs.len()));
         if let Some(t) = &limit_tests[cv] {
             states.push(StateReport {
                 output: input.outputs[j].name.to_string(),
                 states: ctxs[cv].state_names.clone(),
-                hypotheses: ctxs[cv].limited.len(),
+                hypotheses: ctxs[cv]
+                    .physical_terms
+                    .iter()
+                    .filter(|(t, _)| matches!(t, candidates::Term::StateLimit { .. }))
+                    .count(),
                 r2: t.r2,
                 critical: t.threshold.critical,
                 significant: t.significant,
@@ -336,7 +342,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             });
         }
         for (cv, &j) in testable.iter().enumerate() {
-            let flagged: Vec<usize> = (0..input.inputs.len())
+            let mut flagged: Vec<usize> = (0..input.inputs.len())
                 .filter(|&i| {
                     m.cells.iter().any(|c| c.cv == cv && c.mv == i && c.significant)
                         || proj(i, cv).is_some_and(|p| p.significant)
@@ -345,6 +351,13 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             let limits = limit_tests[cv].as_ref().is_some_and(|t| t.significant);
             if flagged.is_empty() && !limits {
                 continue;
+            }
+            if flagged.is_empty() {
+                // The state-limit test says the residual depends on the inputs, not that a limit
+                // is what it is: a wrong gain or time constant correlates with some limit's
+                // correction too. So every input competes with the limits, not just the limits
+                // with no correction.
+                flagged = (0..input.inputs.len()).collect();
             }
             let ctx = &ctxs[cv];
             let inst = instrument_ctx(ctx, &u_driven);
@@ -430,7 +443,7 @@ pub fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCt
         model,
         has_channel,
         s_channel,
-        limited: Vec::new(),
+        physical_terms: Vec::new(),
         state_names: Vec::new(),
     }
 }
@@ -575,11 +588,7 @@ fn decide(
             return (finding, Some(c));
         }
     }
-    let mut names: Vec<&str> = flagged.iter().map(|&i| input.inputs[i].name).collect();
-    if !ctx.limited.is_empty() && flagged.is_empty() {
-        // Only the state-limit test flagged this output: the inputs as a whole drive it.
-        names = input.inputs.iter().map(|u| u.name).collect();
-    }
+    let names: Vec<&str> = flagged.iter().map(|&i| input.inputs[i].name).collect();
     let classes: Vec<&str> = tried.iter().map(|t| t.physics.name()).collect();
     let finding = Finding {
         input: names.first().copied().unwrap_or("").to_string(),

@@ -45,6 +45,34 @@ pub trait PhysicalModel: std::fmt::Debug + Sync {
     /// The output simulated with `state` never above `level`, the fraction `spill` of what
     /// overflows passed on.
     fn simulate_limited(&self, state: usize, level: f64, spill: f64) -> Vec<f64>;
+    /// The output simulated with input `input` multiplied by `ratio` before the model.
+    fn simulate_scaled(&self, input: usize, ratio: f64) -> Vec<f64>;
+}
+
+/// The actuator gain ratios tried through the model ([`Term::ModelGain`]).
+pub const GAIN_RATIOS: [f64; 12] = [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.05, 1.1, 1.25, 1.5, 1.75, 2.0];
+
+/// Every actuator-gain hypothesis of `model` on its `inputs` inputs, with its correction
+/// (`scaled − nominal`) over the whole record. A gain is the one input-side class stated through
+/// the model as well: under a strongly nonlinear model (a tank's level grows with the square of
+/// its inflow) a gain error is not a gain of the linear nominal, and the generic classes name it
+/// something else (measured: a dead zone for a 20 % weaker pump, `tests/diagnose_physical.rs`).
+pub fn gain_terms(model: &dyn PhysicalModel, inputs: usize) -> Vec<(Term, Vec<f64>)> {
+    let nominal = model.simulate();
+    let mut out = Vec::new();
+    for input in 0..inputs {
+        for &ratio in &GAIN_RATIOS {
+            let sc = model.simulate_scaled(input, ratio);
+            if sc.len() != nominal.len() || sc.iter().any(|v| !v.is_finite()) {
+                continue;
+            }
+            out.push((
+                Term::ModelGain { input, ratio },
+                sc.iter().zip(&nominal).map(|(a, b)| a - b).collect(),
+            ));
+        }
+    }
+    out
 }
 
 /// The levels tried per state: quantiles of the state's nominal trajectory on the training rows

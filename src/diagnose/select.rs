@@ -328,16 +328,19 @@ pub fn rank(
             }
         }
     }
-    if limits {
-        // A state limit of the physical model: attributed to the first flagged input (to the
-        // first input when only the state test flagged), since the model, not a channel,
-        // carries it.
-        let i = inputs.first().copied().unwrap_or(0);
-        for (t, _) in &ctx.limited {
-            let Some(f) = fit_term(ctx, inst, r, i, t.clone(), &fit_rows) else { continue };
-            if let Some((score, sse, complexity)) = fold_score(Some(&f)) {
-                out.push(Scored { fitted: Some(f), sse, complexity, score });
-            }
+    // Hypotheses stated through a physical model: its state limits when their test fired
+    // (attributed to the first flagged input, since the model, not a channel, carries them), and
+    // the actuator gains of the flagged inputs.
+    let first = inputs.first().copied().unwrap_or(0);
+    for (t, _) in &ctx.physical_terms {
+        let i = match t {
+            Term::StateLimit { .. } if limits => first,
+            Term::ModelGain { input, .. } if inputs.contains(input) => *input,
+            _ => continue,
+        };
+        let Some(f) = fit_term(ctx, inst, r, i, t.clone(), &fit_rows) else { continue };
+        if let Some((score, sse, complexity)) = fold_score(Some(&f)) {
+            out.push(Scored { fitted: Some(f), sse, complexity, score });
         }
     }
     out.sort_by(|a, b| a.score.total_cmp(&b.score));

@@ -156,6 +156,14 @@ impl PhysicalModel for TanksRecord {
     fn simulate_limited(&self, state: usize, level: f64, spill: f64) -> Vec<f64> {
         self.simulate_with(Some(Overflow { tank: state, level, spill })).0
     }
+
+    fn simulate_scaled(&self, _input: usize, ratio: f64) -> Vec<f64> {
+        let scaled = TanksRecord {
+            runs: self.runs.iter().map(|(u, y0)| (u.iter().map(|v| v * ratio).collect(), *y0)).collect(),
+            ..self.clone()
+        };
+        scaled.simulate_with(None).0
+    }
 }
 
 /// Calibrates [`TwoTanks`] on data without overflow, and returns the simulation over the whole
