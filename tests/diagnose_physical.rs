@@ -143,6 +143,8 @@ fn a_weaker_pump_is_not_named_an_overflow() {
     let y: Vec<f64> = y0.iter().zip(&noise).map(|(a, b)| a + b).collect();
     let d = run(&y, &u, &record);
     eprintln!("{:?}; {:?}", d.report.states, d.report.findings.first().map(|f| (&f.summary, &f.tried)));
+    // The state-limit test must fire, or the limits never compete and the check below is empty.
+    assert!(d.report.states[0].significant, "{:?}", d.report.states);
     let f = d.report.findings.first().expect("a finding");
     assert!(!f.parameters.contains_key("state_index"), "{}", f.summary);
     // Stated through the model, the gain is exact: 0.8 is on the grid of ratios, and the noise

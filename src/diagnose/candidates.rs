@@ -130,8 +130,9 @@ pub enum Term {
     /// what overflows flows on to the next state (an overflowing tank; see [`super::physical`]).
     /// Its column is the re-run model's output minus the nominal simulation, precomputed in
     /// [`OutputCtx::physical_terms`]. `measured`: the state is the measured output itself (the limit
-    /// then acts on the output, otherwise on the way from the input to it).
-    StateLimit { state: usize, level: f64, spill: f64, measured: bool },
+    /// then acts on the output, otherwise on the way from the input to it); `spills`: spill
+    /// fractions were tried for this state (a grid value more in the penalty).
+    StateLimit { state: usize, level: f64, spill: f64, measured: bool, spills: bool },
     /// Input `input` reaches a physical nominal model multiplied by `ratio` (an actuator whose
     /// gain is off), stated by re-running the model; precomputed like [`Term::StateLimit`].
     ModelGain { input: usize, ratio: f64 },
@@ -174,7 +175,8 @@ impl Term {
     pub fn grid_params(&self) -> usize {
         match self {
             Term::Gain | Term::Quadratic | Term::Cubic | Term::CubicOut => 0,
-            Term::MissingCoupling { .. } | Term::DeadZone { .. } | Term::StateLimit { .. } => 2,
+            Term::MissingCoupling { .. } | Term::DeadZone { .. } => 2,
+            Term::StateLimit { spills, .. } => 1 + usize::from(*spills),
             Term::ModelGain { .. } => 1,
             Term::SaturationIn { lo, hi } | Term::SaturationOut { lo, hi } => {
                 usize::from(lo.is_finite()) + usize::from(hi.is_finite())

@@ -167,7 +167,7 @@ pub fn describe(
                 fmt(*o)
             )
         }
-        Term::StateLimit { state, level, spill, measured } => {
+        Term::StateLimit { state, level, spill, spills, .. } => {
             let name = ctx.state_names.get(*state).cloned().unwrap_or_else(|| format!("state {state}"));
             p.insert("state_index".into(), *state as f64);
             p.insert("level".into(), *level);
@@ -175,7 +175,7 @@ pub fn describe(
                 "the model's {name} cannot rise above {} (an overflow the model leaves out)",
                 fmt(*level)
             );
-            if !measured {
+            if *spills {
                 p.insert("spill_fraction".into(), *spill);
                 s.push_str(&format!(
                     "; {:.0} % of what overflows reaches the next stage on the way to {output}",

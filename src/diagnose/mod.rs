@@ -6,7 +6,8 @@
 //! The pipeline, per output:
 //! 1. residual `r = y − s` (recorded minus simulated), MI matrix of the excitations against the
 //!    residuals on the training part ([`crate::detect::analyze`]);
-//! 2. only the inputs whose element is significant are fitted: in a closed loop the inputs carry
+//! 2. only the inputs whose element is significant are fitted (all of them when only the
+//!    state-limit test of a physical model fired, see below): in a closed loop the inputs carry
 //!    the disturbance back through feedback, and the dither, independent of the disturbance, is
 //!    what says a channel is wrong at all — so a disturbance-only change yields no finding;
 //! 3. the nominal model is identified from the simulation (noise-free, [`nominal`]) so every
@@ -19,8 +20,9 @@
 //!    ([`simulate`]) is scored on the held-out tail.
 //!
 //! When the caller hands over the physical model behind a simulation ([`PhysicalModel`], open
-//! loop only), limits on the model's states (an overflow) are hypotheses too: each is the model
-//! re-run with the limit, it has its own locating test, and it competes in step 4 ([`physical`]).
+//! loop only), limits on the model's states (an overflow) and the inputs' actuator gains are
+//! hypotheses too, each the model re-run with it; the limits have their own locating test, and
+//! all compete in step 4 ([`physical`]).
 
 pub mod candidates;
 pub mod describe;
@@ -64,8 +66,10 @@ pub struct DiagnoseInput<'a> {
     /// The simulation of each output (same order), driven by the recorded inputs.
     pub simulated: Vec<Signal<'a>>,
     /// Per output (same order), the physical model behind its simulation when the caller has
-    /// one: limits on the model's states are then tried too ([`physical`]). Empty: none. Open
-    /// loop only.
+    /// one: limits on the model's states and the inputs' actuator gains are then stated by
+    /// re-running it ([`physical`]). Empty: none. Open-loop records only: `diagnose` refuses it
+    /// with excitations, but a record without excitations taken in a closed loop is the
+    /// caller's to keep out (the test's null assumes inputs independent of the residual).
     pub physical: Vec<Option<&'a dyn PhysicalModel>>,
 }
 
@@ -175,6 +179,17 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         }
         for (j, m) in input.physical.iter().enumerate() {
             let Some(m) = m else { continue };
+            if m.inputs() != input.inputs.len() {
+                return Err(DiagnoseError::invalid(
+                    "physical models",
+                    format!(
+                        "the model of output {} takes {} inputs, the record has {}",
+                        input.outputs[j].name,
+                        m.inputs(),
+                        input.inputs.len()
+                    ),
+                ));
+            }
             let sim = m.simulate();
             let s = input.simulated[j].values;
             let scale = 1.0 + s.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -283,7 +298,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         );
         ctxs[cv].state_names = m.state_names();
         ctxs[cv].physical_terms = limits;
-        ctxs[cv].physical_terms.extend(physical::gain_terms(m, input.inputs.len()));
+        ctxs[cv].physical_terms.extend(physical::gain_terms(m));
         if let Some(t) = &limit_tests[cv] {
             states.push(StateReport {
                 output: input.outputs[j].name.to_string(),

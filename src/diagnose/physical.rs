@@ -1,5 +1,6 @@
-//! Hypotheses on the *states* of a physical nominal model: a level that cannot rise above a rim
-//! (an overflow), with part of what overflows passed on to the next state.
+//! Hypotheses stated by re-running a physical nominal model: a *state* that cannot rise above a
+//! rim (an overflow), with part of what overflows passed on to the next state; and an input whose
+//! actuator gain is off ([`gain_terms`]).
 //!
 //! The generic vocabulary states every hypothesis against the linear model identified from the
 //! simulation ([`super::nominal`]). That is exact for a linear simulation and close for a mildly
@@ -21,6 +22,9 @@
 //!
 //! Pure and deterministic: the surrogates are every circular shift between a tenth and nine
 //! tenths of the rows, so no seed enters.
+
+use rustfft::FftPlanner;
+use rustfft::num_complex::Complex64;
 
 use super::candidates::{Term, quantile};
 use crate::detect::ArWhitener;
@@ -45,6 +49,8 @@ pub trait PhysicalModel: std::fmt::Debug + Sync {
     /// The output simulated with `state` never above `level`, the fraction `spill` of what
     /// overflows passed on.
     fn simulate_limited(&self, state: usize, level: f64, spill: f64) -> Vec<f64>;
+    /// Number of inputs the model takes (the record's inputs, in the same order; checked).
+    fn inputs(&self) -> usize;
     /// The output simulated with input `input` multiplied by `ratio` before the model.
     fn simulate_scaled(&self, input: usize, ratio: f64) -> Vec<f64>;
 }
@@ -57,10 +63,10 @@ pub const GAIN_RATIOS: [f64; 12] = [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.05, 1.1, 1.
 /// the model as well: under a strongly nonlinear model (a tank's level grows with the square of
 /// its inflow) a gain error is not a gain of the linear nominal, and the generic classes name it
 /// something else (measured: a dead zone for a 20 % weaker pump, `tests/diagnose_physical.rs`).
-pub fn gain_terms(model: &dyn PhysicalModel, inputs: usize) -> Vec<(Term, Vec<f64>)> {
+pub fn gain_terms(model: &dyn PhysicalModel) -> Vec<(Term, Vec<f64>)> {
     let nominal = model.simulate();
     let mut out = Vec::new();
-    for input in 0..inputs {
+    for input in 0..model.inputs() {
         for &ratio in &GAIN_RATIOS {
             let sc = model.simulate_scaled(input, ratio);
             if sc.len() != nominal.len() || sc.iter().any(|v| !v.is_finite()) {
@@ -95,7 +101,8 @@ pub fn limit_terms(model: &dyn PhysicalModel, rows: std::ops::Range<usize>) -> V
         let mut levels: Vec<f64> =
             LEVEL_QUANTILES.iter().map(|&q| quantile(&x[rows.start..end], q)).collect();
         levels.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
-        let spills: &[f64] = if model.can_spill(state) { &SPILLS } else { &[0.0] };
+        let spills_tried = model.can_spill(state);
+        let spills: &[f64] = if spills_tried { &SPILLS } else { &[0.0] };
         let measured = model.is_measured(state);
         for &level in &levels {
             for &spill in spills {
@@ -104,7 +111,7 @@ pub fn limit_terms(model: &dyn PhysicalModel, rows: std::ops::Range<usize>) -> V
                     continue;
                 }
                 let c: Vec<f64> = lim.iter().zip(&nominal).map(|(a, b)| a - b).collect();
-                out.push((Term::StateLimit { state, level, spill, measured }, c));
+                out.push((Term::StateLimit { state, level, spill, measured, spills: spills_tried }, c));
             }
         }
     }
@@ -143,28 +150,39 @@ pub fn limit_test(
     if syy <= 0.0 {
         return None;
     }
-    let cols: Vec<(Vec<f64>, f64)> = terms
-        .iter()
-        .map(|(_, c)| {
-            let wc = centred(&w.apply(&c[rows.clone()]));
-            let sxx = wc.iter().map(|v| v * v).sum::<f64>();
-            (wc, sxx)
-        })
-        .filter(|(_, sxx)| *sxx > 0.0)
-        .collect();
-    let stat = |shift: usize| -> f64 {
-        cols.iter()
-            .map(|(c, sxx)| {
-                let sxy: f64 = (0..m).map(|t| wr[t] * c[(t + shift) % m]).sum();
-                sxy * sxy / (sxx * syy)
-            })
-            .fold(0.0, f64::max)
+    // Every circular cross-correlation of the whitened residual with a whitened column at once,
+    // by FFT: `xc[s] = Σ_t wr[t]·c[(t + s) mod m] = IFFT(conj(FFT(wr))·FFT(c))[s]`, so the cost
+    // is O(K·m log m) for K columns, not O(K·m²).
+    let mut planner = FftPlanner::new();
+    let forward = planner.plan_fft_forward(m);
+    let inverse = planner.plan_fft_inverse(m);
+    let spectrum = |x: &[f64]| -> Vec<Complex64> {
+        let mut b: Vec<Complex64> = x.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+        forward.process(&mut b);
+        b
     };
-    let r2 = stat(0);
+    let fr = spectrum(&wr);
+    // best[s]: the largest R² over the columns at shift s.
+    let mut best = vec![0.0f64; m];
+    for (_, c) in terms {
+        let wc = centred(&w.apply(&c[rows.clone()]));
+        let sxx: f64 = wc.iter().map(|v| v * v).sum();
+        if sxx <= 0.0 {
+            continue;
+        }
+        let fc = spectrum(&wc);
+        let mut xc: Vec<Complex64> = fr.iter().zip(&fc).map(|(a, b)| a.conj() * b).collect();
+        inverse.process(&mut xc);
+        for (b, x) in best.iter_mut().zip(&xc) {
+            let sxy = x.re / m as f64;
+            *b = b.max(sxy * sxy / (sxx * syy));
+        }
+    }
+    let r2 = best[0];
     // Shifts of at least a tenth of the rows each way, so that a slow correction is moved well
     // past its own correlation time; every such shift, so the critical value carries no seed.
-    let sur: Vec<f64> = (m / 10..=m - m / 10).map(stat).collect();
-    let threshold = Threshold::of(&sur, z);
+    let sur = &best[m / 10..=m - m / 10];
+    let threshold = Threshold::of(sur, z);
     Some(LimitTest { r2, significant: r2 > threshold.critical, threshold })
 }
 
@@ -193,7 +211,7 @@ mod tests {
     }
 
     fn term() -> Term {
-        Term::StateLimit { state: 0, level: 1.0, spill: 0.0, measured: false }
+        Term::StateLimit { state: 0, level: 1.0, spill: 0.0, measured: false, spills: false }
     }
 
     /// A residual that is an affine function of the correction: after the same whitening both

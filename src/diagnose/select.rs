@@ -243,8 +243,9 @@ pub fn prediction_sse(
     Some((sse, used.len()))
 }
 
-/// Every hypothesis on the given inputs of one output (and, when `limits`, every state limit of
-/// its physical model), scored; the null hypothesis first.
+/// Every hypothesis on the given inputs of one output (with a physical model: the actuator gains
+/// of those inputs stated through it, and, when `limits`, every state limit), scored, best
+/// first.
 ///
 /// Each is scored by 3-fold cross-validation within the training part (see [`score`]).
 ///

@@ -58,8 +58,8 @@ impl TwoTanks {
         // The tank's own level cannot start above its rim.
         match overflow {
             Some(Overflow { tank: 0, level, .. }) => h1 = h1.min(level),
-            Some(Overflow { level, .. }) => h2 = h2.min(level),
-            None => {}
+            Some(Overflow { tank: 1, level, .. }) => h2 = h2.min(level),
+            _ => {}
         }
         let mut levels = Vec::with_capacity(u.len());
         let y = u
@@ -94,7 +94,7 @@ impl TwoTanks {
 
 /// One tank overflowing: its level never rises above `level`; a fraction `spill` of the water
 /// that overflows the upper tank (`tank` 0) falls into the lower one (`tank` 1), whatever
-/// overflows the lower tank is lost.
+/// overflows the lower tank is lost. Any other `tank` overflows nowhere.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Overflow {
     /// 0: upper tank, 1: lower tank.
@@ -157,6 +157,11 @@ impl PhysicalModel for TanksRecord {
         self.simulate_with(Some(Overflow { tank: state, level, spill })).0
     }
 
+    fn inputs(&self) -> usize {
+        1
+    }
+
+    /// The pump (the only input) `ratio` times as strong.
     fn simulate_scaled(&self, _input: usize, ratio: f64) -> Vec<f64> {
         let scaled = TanksRecord {
             runs: self.runs.iter().map(|(u, y0)| (u.iter().map(|v| v * ratio).collect(), *y0)).collect(),
@@ -268,4 +273,55 @@ fn coordinate_search(cost: &dyn Fn(&TwoTanks) -> f64, mut p: TwoTanks) -> (f64, 
         }
     }
     (best, p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const M: TwoTanks = TwoTanks { k1: 0.052, k2: 0.043, k3: 0.047, k4: 0.049, offset: -0.8 };
+
+    fn input() -> Vec<f64> {
+        (0..600).map(|t| if (t / 100) % 2 == 0 { 6.0 } else { 1.0 }).collect()
+    }
+
+    /// Without an overflow the model is the plain Torricelli Euler step (the reference loop is the
+    /// calibration's model as first written, kept here independent of `run`): equal to the bit.
+    #[test]
+    fn without_overflow_it_is_the_plain_torricelli_model() {
+        let u = input();
+        let (y, _) = M.simulate_overflowing(&u, 4.0, 3.0, None);
+        let h2s = 3.0 - M.offset;
+        let (mut h1, mut h2) = ((M.k3 * h2s.sqrt() / M.k2).powi(2), h2s);
+        let dt = 4.0 / 16.0;
+        for (t, &v) in u.iter().enumerate() {
+            assert_eq!(y[t], h2 + M.offset, "sample {t}");
+            for _ in 0..16 {
+                let q1 = M.k1 * h1.max(0.0).sqrt();
+                h1 = (h1 + dt * (-q1 + M.k4 * v)).max(0.0);
+                h2 = (h2 + dt * (M.k2 * h1.sqrt() - M.k3 * h2.max(0.0).sqrt())).max(0.0);
+            }
+        }
+        assert_eq!(y, M.simulate_from(&u, 4.0, 3.0));
+    }
+
+    /// With a rim the upper level never exceeds it; the whole overflow falling into the lower
+    /// tank keeps its level above the run where all of it is lost, and with the rim above every
+    /// level reached nothing changes.
+    #[test]
+    fn the_upper_tank_never_rises_above_its_rim() {
+        let u = input();
+        let (_, h) = M.simulate_overflowing(&u, 4.0, 3.0, None);
+        let top = h.iter().map(|x| x[0]).fold(0.0, f64::max);
+        let rim = 0.7 * top;
+        let run = |spill| M.simulate_overflowing(&u, 4.0, 3.0, Some(Overflow { tank: 0, level: rim, spill }));
+        let (lost, hl) = run(0.0);
+        let (kept, _) = run(1.0);
+        assert!(hl.iter().all(|x| x[0] <= rim));
+        assert!(kept.iter().zip(&lost).all(|(a, b)| a >= b));
+        assert!(kept.iter().zip(&lost).any(|(a, b)| a > b));
+        let high =
+            M.simulate_overflowing(&u, 4.0, 3.0, Some(Overflow { tank: 0, level: 2.0 * top, spill: 0.5 }));
+        assert_eq!(high.0, M.simulate_from(&u, 4.0, 3.0));
+    }
 }
