@@ -452,7 +452,7 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     };
     real_case(
         "cascaded_tanks",
-        "Torricelli two tanks, no overflow",
+        "Torricelli two tanks, no overflow (the model itself handed to `diagnose`)",
         time,
         u,
         y,
