@@ -284,13 +284,11 @@ fn output_side_debug() {
 #[ignore]
 fn tanks_state_test_seeds() {
     use mpmwatch::detect::Signal;
-    use mpmwatch::diagnose::tanks::TanksRecord;
     use mpmwatch::diagnose::{DiagnoseInput, PhysicalModel};
     let seeds: u64 = std::env::var("SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
     let cols = read_tanks();
     let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
-    let model = mpmwatch::diagnose::tanks::calibrate(ue, ye, 4.0);
-    let record = TanksRecord { model, ts: 4.0, runs: vec![(ue.clone(), ye[0]), (uv.clone(), yv[0])] };
+    let record = mpmwatch::diagnose::tanks::benchmark_record(ue, ye, uv, yv);
     let s = record.simulate();
     let y: Vec<f64> = ye.iter().chain(yv).copied().collect();
     let u: Vec<f64> = ue.iter().chain(uv).copied().collect();
@@ -305,12 +303,8 @@ fn tanks_state_test_seeds() {
             simulated: vec![Signal { name: "y", values: &s }],
             physical: vec![Some(&record)],
         };
-        let opts = DiagnoseOptions {
-            lags: mpmwatch::info::Lags { min: 1, max: 40 },
-            holdout_fraction: 0.45,
-            seed,
-            ..Default::default()
-        };
+        let opts =
+            mpmwatch::diagnose::tanks::benchmark_options(&DiagnoseOptions { seed, ..Default::default() });
         let d = mpmwatch::diagnose::diagnose(&input, &opts).unwrap();
         let st = &d.report.states[0];
         hits += usize::from(st.significant);

@@ -87,7 +87,7 @@ fn silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises() {
 #[test]
 fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
     use mpmwatch::diagnose::PhysicalModel;
-    use mpmwatch::diagnose::tanks::{TanksRecord, calibrate};
+    use mpmwatch::diagnose::tanks::{benchmark_options, benchmark_record};
     let path = data_dir().join("cascaded_tanks/dataBenchmark.csv");
     if !path.exists() {
         eprintln!(
@@ -99,8 +99,7 @@ fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
     }
     let cols = read_columns(&path, &["uEst", "uVal", "yEst", "yVal"]);
     let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
-    let model = calibrate(ue, ye, 4.0);
-    let record = TanksRecord { model, ts: 4.0, runs: vec![(ue.clone(), ye[0]), (uv.clone(), yv[0])] };
+    let record = benchmark_record(ue, ye, uv, yv);
     let s = record.simulate();
     let u: Vec<f64> = ue.iter().chain(uv).copied().collect();
     let y: Vec<f64> = ye.iter().chain(yv).copied().collect();
@@ -113,13 +112,7 @@ fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
         simulated: vec![Signal { name: "y", values: &s }],
         physical: vec![Some(&record)],
     };
-    // The casebook's settings for this record.
-    let opts = DiagnoseOptions {
-        lags: mpmwatch::info::Lags { min: 1, max: 40 },
-        holdout_fraction: 0.45,
-        ..DiagnoseOptions::default()
-    };
-    let d = diagnose(&input, &opts).unwrap();
+    let d = diagnose(&input, &benchmark_options(&DiagnoseOptions::default())).unwrap();
     let f = d.report.findings.first().expect("a finding on the cascaded tanks");
     assert_eq!(f.physics, Physics::Saturation, "{}", f.summary);
     assert_eq!(f.parameters.get("state_index"), Some(&0.0), "{}", f.summary);

@@ -427,29 +427,14 @@ fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<Real
     let (h, c) = read_plain(&p)?;
     let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
     let (uv, yv) = (column(&h, &c, "uVal", &p)?, column(&h, &c, "yVal", &p)?);
-    // Calibrated on the estimation record's overflow-free runs, then both records
-    // simulated (each from its own measured initial level, the only recorded output the
-    // simulation sees) and diagnosed as one 2048-sample record: the validation record is the
-    // held-out tail.
-    let model = mpmwatch::diagnose::tanks::calibrate(&ue, &ye, 4.0);
     // The simulation handed to `diagnose` is the model's own, so that it can re-run the model
     // with a tank overflowing.
-    let record = mpmwatch::diagnose::tanks::TanksRecord {
-        model,
-        ts: 4.0,
-        runs: vec![(ue.clone(), ye[0]), (uv.clone(), yv[0])],
-    };
+    let record = mpmwatch::diagnose::tanks::benchmark_record(&ue, &ye, &uv, &yv);
     let s = mpmwatch::diagnose::PhysicalModel::simulate(&record);
     let u: Vec<f64> = ue.iter().chain(&uv).copied().collect();
     let y: Vec<f64> = ye.iter().chain(&yv).copied().collect();
-    let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();
-    // The tanks answer over tens of samples (time constants of minutes at Ts = 4 s): the MI
-    // profile needs lags to 40 to see the input's effect at all.
-    let opts = DiagnoseOptions {
-        lags: mpmwatch::info::Lags { min: 1, max: 40 },
-        holdout_fraction: 0.45,
-        ..opts.clone()
-    };
+    let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * record.ts).collect();
+    let opts = mpmwatch::diagnose::tanks::benchmark_options(opts);
     real_case(
         "cascaded_tanks",
         "Torricelli two tanks, no overflow (the model itself handed to `diagnose`)",

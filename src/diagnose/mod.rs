@@ -289,7 +289,9 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut states = Vec::new();
     for (cv, &j) in testable.iter().enumerate() {
         let Some(m) = input.physical.get(j).copied().flatten() else { continue };
-        let limits = physical::limit_terms(m, split.train.clone());
+        // The simulation handed in is the model's own (checked above), so it is the nominal.
+        let nominal = input.simulated[j].values;
+        let limits = physical::limit_terms(m, nominal, split.train.clone());
         limit_tests[cv] = physical::limit_test(
             &residuals[j],
             &limits,
@@ -298,7 +300,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         );
         ctxs[cv].state_names = m.state_names();
         ctxs[cv].physical_terms = limits;
-        ctxs[cv].physical_terms.extend(physical::gain_terms(m));
+        ctxs[cv].physical_terms.extend(physical::gain_terms(m, nominal));
         if let Some(t) = &limit_tests[cv] {
             states.push(StateReport {
                 output: input.outputs[j].name.to_string(),

@@ -58,13 +58,12 @@ pub trait PhysicalModel: std::fmt::Debug + Sync {
 /// The actuator gain ratios tried through the model ([`Term::ModelGain`]).
 pub const GAIN_RATIOS: [f64; 12] = [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.05, 1.1, 1.25, 1.5, 1.75, 2.0];
 
-/// Every actuator-gain hypothesis of `model` on its `inputs` inputs, with its correction
-/// (`scaled − nominal`) over the whole record. A gain is the one input-side class stated through
+/// Every actuator-gain hypothesis of `model` on each of its inputs, with its correction
+/// (`scaled − nominal`, `nominal` the model's simulation) over the whole record. A gain is the one input-side class stated through
 /// the model as well: under a strongly nonlinear model (a tank's level grows with the square of
 /// its inflow) a gain error is not a gain of the linear nominal, and the generic classes name it
 /// something else (measured: a dead zone for a 20 % weaker pump, `tests/diagnose_physical.rs`).
-pub fn gain_terms(model: &dyn PhysicalModel) -> Vec<(Term, Vec<f64>)> {
-    let nominal = model.simulate();
+pub fn gain_terms(model: &dyn PhysicalModel, nominal: &[f64]) -> Vec<(Term, Vec<f64>)> {
     let mut out = Vec::new();
     for input in 0..model.inputs() {
         for &ratio in &GAIN_RATIOS {
@@ -74,7 +73,7 @@ pub fn gain_terms(model: &dyn PhysicalModel) -> Vec<(Term, Vec<f64>)> {
             }
             out.push((
                 Term::ModelGain { input, ratio },
-                sc.iter().zip(&nominal).map(|(a, b)| a - b).collect(),
+                sc.iter().zip(nominal).map(|(a, b)| a - b).collect(),
             ));
         }
     }
@@ -88,10 +87,13 @@ pub const LEVEL_QUANTILES: [f64; 10] = [0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.9, 0.9
 /// The spill fractions tried where a state can spill.
 pub const SPILLS: [f64; 6] = [0.0, 0.2, 0.4, 0.6, 0.8, 1.0];
 
-/// Every limit hypothesis of `model` with its correction (`limited − nominal`) over the whole
-/// record; `rows` are the training rows the grid is built on.
-pub fn limit_terms(model: &dyn PhysicalModel, rows: std::ops::Range<usize>) -> Vec<(Term, Vec<f64>)> {
-    let nominal = model.simulate();
+/// Every limit hypothesis of `model` with its correction (`limited − nominal`, `nominal` the
+/// model's simulation) over the whole record; `rows` are the training rows the grid is built on.
+pub fn limit_terms(
+    model: &dyn PhysicalModel,
+    nominal: &[f64],
+    rows: std::ops::Range<usize>,
+) -> Vec<(Term, Vec<f64>)> {
     let mut out = Vec::new();
     for (state, x) in model.state_trajectories().iter().enumerate() {
         let end = rows.end.min(x.len());
@@ -110,7 +112,7 @@ pub fn limit_terms(model: &dyn PhysicalModel, rows: std::ops::Range<usize>) -> V
                 if lim.len() != nominal.len() || lim.iter().any(|v| !v.is_finite()) {
                     continue;
                 }
-                let c: Vec<f64> = lim.iter().zip(&nominal).map(|(a, b)| a - b).collect();
+                let c: Vec<f64> = lim.iter().zip(nominal).map(|(a, b)| a - b).collect();
                 out.push((Term::StateLimit { state, level, spill, measured, spills: spills_tried }, c));
             }
         }
