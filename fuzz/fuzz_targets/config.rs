@@ -2,8 +2,8 @@
 //! never a panic; a config that validates builds its controllers (nominal models included).
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use mpmwatch::service::config::Config;
-use mpmwatch::service::controller::Controller;
+use mpmwatch_service::config::Config;
+use mpmwatch_service::controller::Controller;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };

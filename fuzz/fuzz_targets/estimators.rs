@@ -2,7 +2,7 @@
 //! an error or a number, never a panic.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use mpmwatch::info::{Lags, MiOptions, SurrogateOptions, XKind, lagged_test, mutual_information};
+use mpmwatch_core::info::{Lags, MiOptions, SurrogateOptions, XKind, lagged_test, mutual_information};
 
 fuzz_target!(|data: &[u8]| {
     if data.len() < 2 {

@@ -3,8 +3,8 @@
 //! controller fed the bytes counts every sample as accepted or dropped.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use mpmwatch::service::controller::Controller;
-use mpmwatch::service::payload::{self, MAX_BATCH, Role};
+use mpmwatch_service::controller::Controller;
+use mpmwatch_service::payload::{self, MAX_BATCH, Role};
 
 const CONFIG: &str = r#"
 [[controller]]
@@ -29,7 +29,7 @@ fuzz_target!(|data: &[u8]| {
         let _ = payload::parse_key("mpm", key);
     }
     // The same bytes through a controller, twice (the second sees the state the first left).
-    let cfg = mpmwatch::service::config::Config::parse(CONFIG, "fuzz").expect("config");
+    let cfg = mpmwatch_service::config::Config::parse(CONFIG, "fuzz").expect("config");
     let mut c = Controller::new(cfg.controllers[0].clone()).expect("controller");
     for role in [Role::Cv, Role::Cv] {
         let n = payload::decode(data).map(|s| s.len() as u64).unwrap_or(1);

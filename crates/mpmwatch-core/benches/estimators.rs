@@ -1,0 +1,51 @@
+//! Criterion benchmarks of the estimation core at N = 2048, k = 4 (the figures the README
+//! quotes come from `mpmwatch bench`, which times the same operations without criterion).
+//!
+//! Run: `cargo bench --bench estimators`.
+
+use criterion::{Criterion, black_box, criterion_group, criterion_main};
+use mpmwatch_core::info::{
+    Iaaft, IaaftOptions, Lags, MiOptions, SurrogateOptions, lagged_test, mutual_information,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+fn ar1(rng: &mut ChaCha8Rng, n: usize, a: f64) -> Vec<f64> {
+    let mut prev = 0.0;
+    (0..n)
+        .map(|_| {
+            let e: f64 = StandardNormal.sample(rng);
+            prev = a * prev + e;
+            prev
+        })
+        .collect()
+}
+
+fn estimators(c: &mut Criterion) {
+    let n = 2048;
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let dither: Vec<f64> = (0..n).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect();
+    let residual = ar1(&mut rng, n, 0.7);
+    let continuous = ar1(&mut rng, n, 0.5);
+    let opts = MiOptions::default();
+    c.bench_function("ksg_binary_2048", |b| {
+        b.iter(|| mutual_information(black_box(&dither), black_box(&residual), &opts).unwrap())
+    });
+    c.bench_function("ksg_continuous_2048", |b| {
+        b.iter(|| mutual_information(black_box(&continuous), black_box(&residual), &opts).unwrap())
+    });
+    let generator = Iaaft::new(&residual, IaaftOptions::default()).unwrap();
+    c.bench_function("iaaft_surrogate_2048", |b| b.iter(|| generator.generate(&mut rng)));
+    let lags = Lags::new(1, 20).unwrap();
+    let sur = SurrogateOptions::default();
+    let mut group = c.benchmark_group("element");
+    group.sample_size(10);
+    group.bench_function("binary_20_lags_100_surrogates_2048", |b| {
+        b.iter(|| lagged_test(&dither, &residual, lags, 1, &opts, &sur).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, estimators);
+criterion_main!(benches);

@@ -1,0 +1,169 @@
+//! Least squares and instrumental variables by SVD: one solver for every regression in the
+//! project (partialling out dithers, ARX identification, hypothesis fits, projection tests).
+
+use nalgebra::{DMatrix, DVector};
+
+/// Singular values below this fraction of the largest are treated as zero: collinear columns
+/// (an over-parameterised model, a constant regressor, two dithers that are shifted copies within
+/// a lag window) give the minimum-norm solution instead of noise amplified by 1e16.
+const RCOND: f64 = 1e-10;
+
+/// Least squares `min ‖X θ − y‖` over the rows `rows` of the columns `cols` (each a full-length
+/// series). Returns `None` when a value is not finite.
+pub fn least_squares(cols: &[&[f64]], y: &[f64], rows: std::ops::Range<usize>) -> Option<Vec<f64>> {
+    least_squares_rows(cols, y, &rows.collect::<Vec<_>>())
+}
+
+/// [`least_squares`] over any set of rows.
+pub fn least_squares_rows(cols: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Vec<f64>> {
+    let p = cols.len();
+    if p == 0 {
+        return Some(Vec::new());
+    }
+    let n = rows.len();
+    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows[r]]);
+    let b = DVector::from_fn(n, |r, _| y[rows[r]]);
+    let svd = x.svd(true, true);
+    let smax = svd.singular_values.max();
+    if !smax.is_finite() {
+        return None;
+    }
+    let theta = svd.solve(&b, smax * RCOND).ok()?;
+    let out: Vec<f64> = theta.iter().copied().collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// Instrumental-variable estimate: solves `Zᵀ X θ = Zᵀ y` over `rows`, with one instrument column
+/// per regressor. In a closed loop the regressors (built from the recorded inputs) carry the
+/// disturbance back through feedback and least squares is biased; instruments built from the
+/// dither-driven part of the inputs are independent of the disturbance, so the estimate is not.
+/// With `Z = X` this is least squares.
+pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Vec<f64>> {
+    let p = cols.len();
+    if p == 0 || inst.len() != p {
+        return None;
+    }
+    let n = rows.len();
+    let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows[r]]);
+    let z = DMatrix::from_fn(n, p, |r, c| inst[c][rows[r]]);
+    let b = DVector::from_fn(n, |r, _| y[rows[r]]);
+    let zx = z.transpose() * &x;
+    let zy = z.transpose() * b;
+    let svd = zx.svd(true, true);
+    let smax = svd.singular_values.max();
+    if !smax.is_finite() || smax == 0.0 {
+        return None;
+    }
+    // The p×p cross-moment matrix squares the condition number of X: a looser cut-off.
+    let theta = svd.solve(&zy, smax * RCOND * 10.0).ok()?;
+    let out: Vec<f64> = theta.iter().copied().collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// R² of `y` on the columns plus a constant (all of the same length): the share of `y`'s
+/// variance the least-squares fit explains, in [0, 1]; 0 when `y` is constant, when there are
+/// fewer than two rows per coefficient, or when the fit fails.
+pub fn r_squared(y: &[f64], cols: &[Vec<f64>]) -> f64 {
+    let n = y.len();
+    if n < 2 * (cols.len() + 1) {
+        return 0.0;
+    }
+    let my = y.iter().sum::<f64>() / n as f64;
+    let sst: f64 = y.iter().map(|v| (v - my) * (v - my)).sum();
+    if sst <= 0.0 {
+        return 0.0;
+    }
+    let ones = vec![1.0; n];
+    let mut refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    refs.push(&ones);
+    let Some(theta) = least_squares(&refs, y, 0..n) else { return 0.0 };
+    let sse: f64 = (0..n)
+        .map(|t| {
+            let fit: f64 = refs.iter().zip(&theta).map(|(c, th)| c[t] * th).sum();
+            (y[t] - fit).powi(2)
+        })
+        .sum();
+    (1.0 - sse / sst).clamp(0.0, 1.0)
+}
+
+/// The orthogonal projection on the span of some feature columns over a block of rows.
+#[derive(Debug, Clone)]
+pub struct Projector {
+    q: DMatrix<f64>,
+}
+
+impl Projector {
+    /// An orthonormal basis of the features on `rows` (thin SVD; directions with singular values
+    /// below 1e-8 of the largest are dropped, so collinear features cost nothing).
+    pub fn new(features: &[Vec<f64>], rows: std::ops::Range<usize>) -> Self {
+        let n = rows.len();
+        let x = DMatrix::from_fn(n, features.len(), |r, c| features[c][rows.start + r]);
+        let svd = x.svd(true, false);
+        let smax = svd.singular_values.max();
+        let u = svd.u.unwrap_or_else(|| DMatrix::zeros(n, 0));
+        let keep: Vec<usize> =
+            (0..svd.singular_values.len()).filter(|&k| svd.singular_values[k] > 1e-8 * smax).collect();
+        let q = DMatrix::from_fn(n, keep.len(), |r, c| u[(r, keep[c])]);
+        Self { q }
+    }
+
+    /// `P x` for `x` given on the projector's rows.
+    pub fn project(&self, x: &[f64]) -> Vec<f64> {
+        let v = DVector::from_column_slice(x);
+        let coef = self.q.transpose() * v;
+        (&self.q * coef).as_slice().to_vec()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn least_squares_recovers_exact_coefficients() {
+        let x1: Vec<f64> = (0..50).map(|t| (t as f64 * 0.3).sin()).collect();
+        let x2: Vec<f64> = (0..50).map(|t| (t as f64 * 0.7).cos()).collect();
+        let y: Vec<f64> = x1.iter().zip(&x2).map(|(a, b)| 2.0 * a - 0.5 * b).collect();
+        let th = least_squares(&[&x1, &x2], &y, 0..50).unwrap();
+        assert!((th[0] - 2.0).abs() < 1e-10 && (th[1] + 0.5).abs() < 1e-10);
+    }
+
+    #[test]
+    fn collinear_columns_get_the_minimum_norm_solution() {
+        // y = x and two identical columns: the minimum-norm split is one half each.
+        let x: Vec<f64> = (0..40).map(|t| (t as f64 * 0.4).sin()).collect();
+        let th = least_squares(&[&x, &x], &x, 0..40).unwrap();
+        assert!((th[0] - 0.5).abs() < 1e-9 && (th[1] - 0.5).abs() < 1e-9, "{th:?}");
+    }
+
+    #[test]
+    fn instrumental_with_the_regressors_as_instruments_is_least_squares() {
+        let x: Vec<f64> = (0..60).map(|t| (t as f64 * 0.21).sin() + 0.1 * (t % 7) as f64).collect();
+        let y: Vec<f64> = x.iter().enumerate().map(|(t, v)| 1.5 * v + 0.01 * ((t * 13) % 5) as f64).collect();
+        let rows: Vec<usize> = (0..60).collect();
+        let a = least_squares_rows(&[&x], &y, &rows).unwrap();
+        let b = instrumental(&[&x], &[&x], &y, &rows).unwrap();
+        assert!((a[0] - b[0]).abs() < 1e-9);
+    }
+
+    #[test]
+    fn r_squared_of_an_affine_map_is_one_and_of_a_constant_zero() {
+        let x: Vec<f64> = (0..100).map(|t| (t as f64 * 0.37).sin()).collect();
+        let y: Vec<f64> = x.iter().map(|v| 3.0 - 2.0 * v).collect();
+        assert!((r_squared(&y, &[x.clone()]) - 1.0).abs() < 1e-12);
+        assert_eq!(r_squared(&[4.0; 100], &[x]), 0.0);
+    }
+
+    #[test]
+    fn projection_is_idempotent_and_keeps_the_span() {
+        let f: Vec<Vec<f64>> = vec![(0..30).map(|t| t as f64).collect(), vec![1.0; 30]];
+        let p = Projector::new(&f, 0..30);
+        let line: Vec<f64> = (0..30).map(|t| 2.0 * t as f64 - 1.0).collect();
+        let pl = p.project(&line);
+        assert!(pl.iter().zip(&line).all(|(a, b)| (a - b).abs() < 1e-9));
+        let noise: Vec<f64> = (0..30).map(|t| ((t * 7919) % 13) as f64).collect();
+        let once = p.project(&noise);
+        let twice = p.project(&once);
+        assert!(once.iter().zip(&twice).all(|(a, b)| (a - b).abs() < 1e-9));
+    }
+}

@@ -1,0 +1,431 @@
+//! The candidate physics: for each vocabulary class, a family of terms built on one input
+//! channel (or on the output), each the regressor columns of a correction that is linear in its
+//! coefficients once the grid values (a width, a limit, a lag, a pole) are fixed.
+//!
+//! Input-acting classes pass `φ(u) − u` through the nominal model's own dynamics of the channel
+//! (`B_i/A`, see [`super::nominal`]): a dead zone in front of the model is the model applied to
+//! the dead-zoned input, so the correction is the model applied to the difference. Output-acting
+//! classes act on the simulated output (a clip, an |·| sensor) or feed it back through the
+//! channel (cubic stiffness, Coulomb friction), which makes the corrected simulation recursive.
+
+use serde::{Deserialize, Serialize};
+
+use super::nominal::NominalArx;
+use mpmwatch_core::model::DiscreteTf;
+use mpmwatch_core::numerics::{lagged as delayed, quantile};
+
+/// The fixed vocabulary of left-out physics (DESIGN.md §4.5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Physics {
+    /// The channel's static gain is off.
+    Gain,
+    /// The channel's time constant is off.
+    TimeConstant,
+    /// The channel's dead time is longer than modelled.
+    DeadTime,
+    /// The model says the input does not reach the output; the plant responds.
+    MissingCoupling,
+    /// No response to small input moves around the operating point.
+    DeadZone,
+    /// An actuator limit, or an output overflow or clip.
+    Saturation,
+    /// A term in the square of the input deviation.
+    Quadratic,
+    /// A term in the cube of the input (or output) deviation.
+    Cubic,
+    /// A product of two lagged inputs.
+    Bilinear,
+    /// Play: the actuator does not move until the input reverses by more than the gap.
+    Backlash,
+    /// A constant force against the sign of motion.
+    CoulombFriction,
+    /// The sensor sees the absolute value of the signal.
+    AbsSensor,
+    /// The residual carries information about the input, but no candidate explains it.
+    Unexplained,
+}
+
+impl Physics {
+    /// Every class but `unexplained`, in report order.
+    pub const ALL: [Physics; 12] = [
+        Physics::Gain,
+        Physics::TimeConstant,
+        Physics::DeadTime,
+        Physics::MissingCoupling,
+        Physics::DeadZone,
+        Physics::Saturation,
+        Physics::Quadratic,
+        Physics::Cubic,
+        Physics::Bilinear,
+        Physics::Backlash,
+        Physics::CoulombFriction,
+        Physics::AbsSensor,
+    ];
+
+    /// The snake_case name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Physics::Gain => "gain",
+            Physics::TimeConstant => "time_constant",
+            Physics::DeadTime => "dead_time",
+            Physics::MissingCoupling => "missing_coupling",
+            Physics::DeadZone => "dead_zone",
+            Physics::Saturation => "saturation",
+            Physics::Quadratic => "quadratic",
+            Physics::Cubic => "cubic",
+            Physics::Bilinear => "bilinear",
+            Physics::Backlash => "backlash",
+            Physics::CoulombFriction => "coulomb_friction",
+            Physics::AbsSensor => "abs_sensor",
+            Physics::Unexplained => "unexplained",
+        }
+    }
+}
+
+/// Where the left-out physics acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActsOn {
+    /// On the manipulated variable before the model's dynamics (or, for a state limit of a
+    /// physical model, on a state between the input and the measured output).
+    Input,
+    /// On the output (a sensor, a clip, or a force fed back from the output).
+    Output,
+}
+
+/// One concrete hypothesis: a class with its grid values on one input channel.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Term {
+    /// `θ·s_ji`: the channel's gain scaled by `1 + θ`.
+    Gain,
+    /// `s_ji(t − d) − s_ji(t)`: `d` more samples of dead time.
+    DeadTime(usize),
+    /// A unit-gain lead–lag moving the dominant pole from `p0` to `p1`.
+    TimeConstant { p0: f64, p1: f64 },
+    /// A first-order lag `(1−p) q^−d/(1 − p q^−1)` of the input where the model has none.
+    MissingCoupling { pole: f64, delay: usize },
+    /// Dead zone of half-width `w` around `centre` (a deviation from the input's median).
+    DeadZone { centre: f64, w: f64 },
+    /// Input clipped to `[lo, hi]` (deviations from the operating point; ±∞ for one side).
+    SaturationIn { lo: f64, hi: f64 },
+    /// Output clipped to `[lo, hi]` (absolute values).
+    SaturationOut { lo: f64, hi: f64 },
+    /// Square of the input deviation through the channel, with a linear term so that the
+    /// parabola's centre is free (`q(u − c)² = qu² − 2qcu + qc²`).
+    Quadratic,
+    /// Cube of the input deviation through the channel, with square and linear terms (a cubic
+    /// about a free centre).
+    Cubic,
+    /// Cube of the output deviation fed back through the channel (a hardening spring).
+    CubicOut,
+    /// Products of lagged input deviations, the lags chosen by FROLS: `(input, lag, input, lag)`.
+    Bilinear(Vec<(usize, usize, usize, usize)>),
+    /// Play of total width `w`.
+    Backlash(f64),
+    /// `sign(ŷ)` (velocity output) or `sign(Δŷ)` (position output) fed back through the channel.
+    Coulomb { on_change: bool },
+    /// The sensor reads `|x − o| + o`.
+    AbsSensor(f64),
+    /// A state of a physical nominal model never rises above `level`; the fraction `spill` of
+    /// what overflows flows on to the next state (an overflowing tank; see [`super::physical`]).
+    /// Its column is the re-run model's output minus the nominal simulation, precomputed in
+    /// [`OutputCtx::physical_terms`]. `measured`: the state is the measured output itself (the limit
+    /// then acts on the output, otherwise on the way from the input to it); `spills`: spill
+    /// fractions were tried for this state (a grid value more in the penalty).
+    StateLimit { state: usize, level: f64, spill: f64, measured: bool, spills: bool },
+    /// Input `input` reaches a physical nominal model multiplied by `ratio` (an actuator whose
+    /// gain is off), stated by re-running the model; precomputed like [`Term::StateLimit`].
+    ModelGain { input: usize, ratio: f64 },
+}
+
+impl Term {
+    /// Its vocabulary class.
+    pub fn physics(&self) -> Physics {
+        match self {
+            Term::Gain | Term::ModelGain { .. } => Physics::Gain,
+            Term::DeadTime(_) => Physics::DeadTime,
+            Term::TimeConstant { .. } => Physics::TimeConstant,
+            Term::MissingCoupling { .. } => Physics::MissingCoupling,
+            Term::DeadZone { .. } => Physics::DeadZone,
+            Term::SaturationIn { .. } | Term::SaturationOut { .. } | Term::StateLimit { .. } => {
+                Physics::Saturation
+            }
+            Term::Quadratic => Physics::Quadratic,
+            Term::Cubic | Term::CubicOut => Physics::Cubic,
+            Term::Bilinear(_) => Physics::Bilinear,
+            Term::Backlash(_) => Physics::Backlash,
+            Term::Coulomb { .. } => Physics::CoulombFriction,
+            Term::AbsSensor(_) => Physics::AbsSensor,
+        }
+    }
+
+    /// Where it acts.
+    pub fn acts_on(&self) -> ActsOn {
+        match self {
+            Term::SaturationOut { .. }
+            | Term::CubicOut
+            | Term::Coulomb { .. }
+            | Term::AbsSensor(_)
+            | Term::StateLimit { measured: true, .. } => ActsOn::Output,
+            _ => ActsOn::Input,
+        }
+    }
+
+    /// Number of values fixed by a grid or a selection (counted in the complexity penalty).
+    pub fn grid_params(&self) -> usize {
+        match self {
+            Term::Gain | Term::Quadratic | Term::Cubic | Term::CubicOut => 0,
+            Term::MissingCoupling { .. } | Term::DeadZone { .. } => 2,
+            Term::StateLimit { spills, .. } => 1 + usize::from(*spills),
+            Term::ModelGain { .. } => 1,
+            Term::SaturationIn { lo, hi } | Term::SaturationOut { lo, hi } => {
+                usize::from(lo.is_finite()) + usize::from(hi.is_finite())
+            }
+            Term::Bilinear(t) => t.len(),
+            _ => 1,
+        }
+    }
+
+    /// Whether the physics fixes the term's weight at 1: the plant is the model applied to
+    /// `φ(u)` (a dead zone, a limit, play, a longer delay, a lead–lag, a sensor map), so the
+    /// correction is exactly `G0(φ(u) − u)` and only the grid value is free. A free weight would
+    /// let, say, a scaled dead zone imitate a gain change.
+    pub fn fixed_weight(&self) -> bool {
+        matches!(
+            self,
+            Term::DeadTime(_)
+                | Term::TimeConstant { .. }
+                | Term::DeadZone { .. }
+                | Term::SaturationIn { .. }
+                | Term::SaturationOut { .. }
+                | Term::Backlash(_)
+                | Term::AbsSensor(_)
+                | Term::StateLimit { .. }
+                | Term::ModelGain { .. }
+        )
+    }
+
+    /// Whether the correction feeds back its own output (simulated step by step).
+    pub fn is_recursive(&self) -> bool {
+        matches!(self, Term::CubicOut | Term::Coulomb { .. })
+    }
+}
+
+/// Everything the terms of one output are built from.
+#[derive(Debug, Clone)]
+pub struct OutputCtx {
+    /// Recorded inputs minus their operating point (median over the training part).
+    pub ut: Vec<Vec<f64>>,
+    /// The operating points.
+    pub u0: Vec<f64>,
+    /// Recorded output.
+    pub y: Vec<f64>,
+    /// Nominal simulation of this output.
+    pub s: Vec<f64>,
+    /// Operating point of the output (median of the simulation over the training part).
+    pub y0: f64,
+    /// The nominal model identified from the simulation.
+    pub model: NominalArx,
+    /// Per input: does the model have this channel at all.
+    pub has_channel: Vec<bool>,
+    /// Per input: `s_ji`, the model's response to the centred input.
+    pub s_channel: Vec<Vec<f64>>,
+    /// With a physical nominal model: every hypothesis stated by re-running it (state limits,
+    /// actuator gains) and its correction (see [`super::physical`]); empty otherwise.
+    pub physical_terms: Vec<(Term, Vec<f64>)>,
+    /// With a physical nominal model: the name of each of its states.
+    pub state_names: Vec<String>,
+}
+
+impl OutputCtx {
+    /// The regressor columns of a non-recursive term on input `i` (the intercept is added by the
+    /// fitter). For a recursive term: its columns linearised at the recorded output.
+    pub fn columns(&self, i: usize, term: &Term) -> Vec<Vec<f64>> {
+        let u = &self.ut[i];
+        let g0 = |x: &[f64]| self.model.channel(i, x);
+        let sc = &self.s_channel[i];
+        match term {
+            Term::Gain => vec![sc.clone()],
+            Term::DeadTime(d) => vec![delayed(sc, *d).iter().zip(sc).map(|(a, b)| a - b).collect()],
+            Term::TimeConstant { p0, p1 } => {
+                let k = (1.0 - p1) / (1.0 - p0);
+                let ll = first_order(vec![k, -k * p0], *p1, sc);
+                vec![ll.iter().zip(sc).map(|(a, b)| a - b).collect()]
+            }
+            Term::MissingCoupling { pole, delay } => {
+                let mut b = vec![0.0; delay + 1];
+                b[*delay] = 1.0 - pole;
+                vec![first_order(b, *pole, u)]
+            }
+            Term::DeadZone { centre, w } => {
+                vec![g0(&u.iter().map(|v| -(v - centre).clamp(-w, *w)).collect::<Vec<_>>())]
+            }
+            Term::SaturationIn { lo, hi } => {
+                vec![g0(&u.iter().map(|v| v.clamp(*lo, *hi) - v).collect::<Vec<_>>())]
+            }
+            Term::SaturationOut { lo, hi } => vec![self.s.iter().map(|v| v.clamp(*lo, *hi) - v).collect()],
+            Term::Quadratic => {
+                vec![g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()), self.s_channel[i].clone()]
+            }
+            Term::Cubic => vec![
+                g0(&u.iter().map(|v| v * v * v).collect::<Vec<_>>()),
+                g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()),
+                self.s_channel[i].clone(),
+            ],
+            Term::CubicOut => vec![g0(&self.y.iter().map(|v| (v - self.y0).powi(3)).collect::<Vec<_>>())],
+            Term::Bilinear(pairs) => pairs
+                .iter()
+                .map(|&(ia, la, ib, lb)| {
+                    let (a, b) = (delayed(&self.ut[ia], la), delayed(&self.ut[ib], lb));
+                    g0(&a.iter().zip(&b).map(|(x, y)| x * y).collect::<Vec<_>>())
+                })
+                .collect(),
+            Term::Backlash(w) => {
+                let p = play(u, *w);
+                vec![g0(&p.iter().zip(u).map(|(a, b)| a - b).collect::<Vec<_>>())]
+            }
+            Term::Coulomb { on_change } => vec![g0(&coulomb_input(&self.y, *on_change))],
+            Term::AbsSensor(o) => vec![self.s.iter().map(|v| (v - o).abs() + o - v).collect()],
+            Term::StateLimit { .. } | Term::ModelGain { .. } => self
+                .physical_terms
+                .iter()
+                .filter(|(t, _)| t == term)
+                .map(|(_, c)| c.clone())
+                .take(1)
+                .collect(),
+        }
+    }
+
+    /// Every candidate bilinear product on input `i`: the same input at two different lags
+    /// (0..=3), and input `i` times each other input at lags 0..=2.
+    pub fn bilinear_pool(&self, i: usize) -> Vec<(usize, usize, usize, usize)> {
+        let mut pool = Vec::new();
+        for la in 0..=3 {
+            for lb in la + 1..=3 {
+                pool.push((i, la, i, lb));
+            }
+        }
+        for k in 0..self.ut.len() {
+            if k != i {
+                for l in 0..=2 {
+                    pool.push((i, 0, k, l));
+                    if l > 0 {
+                        pool.push((i, l, k, 0));
+                    }
+                }
+            }
+        }
+        pool
+    }
+}
+
+/// The input of the friction term: `sign(y)` for a velocity, `sign(y(t) − y(t−1))` for a position.
+pub fn coulomb_input(y: &[f64], on_change: bool) -> Vec<f64> {
+    (0..y.len())
+        .map(|t| {
+            let v = if on_change { if t > 0 { y[t] - y[t - 1] } else { 0.0 } } else { y[t] };
+            if v > 0.0 {
+                1.0
+            } else if v < 0.0 {
+                -1.0
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The play (backlash) operator of total width `w`: the output follows the input only once the
+/// input has moved more than `w/2` past it, starting at the first input value.
+pub fn play(u: &[f64], w: f64) -> Vec<f64> {
+    let h = w / 2.0;
+    let mut out = Vec::with_capacity(u.len());
+    let mut z = u.first().copied().unwrap_or(0.0);
+    for &v in u {
+        if v > z + h {
+            z = v - h;
+        } else if v < z - h {
+            z = v + h;
+        }
+        out.push(z);
+    }
+    out
+}
+
+/// The grid of concrete terms tried on input `i` of this output (bilinear excluded: its lags
+/// are chosen by FROLS in the fitter).
+pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term> {
+    let mut out = Vec::new();
+    if !ctx.has_channel[i] {
+        for pole in [0.0, 0.5, 0.7, 0.8, 0.9, 0.95] {
+            for delay in 1..=6 {
+                out.push(Term::MissingCoupling { pole, delay });
+            }
+        }
+        return out;
+    }
+    let u = &ctx.ut[i][rows.clone()];
+    let s = &ctx.s[rows.clone()];
+    out.push(Term::Gain);
+    out.extend((1..=8).map(Term::DeadTime));
+    let p0 = ctx.model.dominant_pole(i, 2000);
+    let tau0 = -1.0 / p0.ln();
+    for rho in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0] {
+        out.push(Term::TimeConstant { p0, p1: (-1.0 / (rho * tau0)).exp() });
+    }
+    // Centres of the symmetric nonlinearities: quantiles of the input, and its mean. The mean
+    // matters under a binary dither: the input is then two clusters (±1 plus the controller's
+    // move) and its median falls anywhere in the gap between them, so no quantile sits at the
+    // operating point. (Casebook c09 is still named a gain with it: over two clusters a dead zone
+    // and a gain reduction move the input alike, and the dead zone loses by its penalty.)
+    let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
+    let centres: Vec<f64> =
+        [0.3, 0.4, 0.5, 0.6, 0.7].iter().map(|&q| quantile(u, q)).chain(std::iter::once(mean)).collect();
+    for &centre in &centres {
+        let dev: Vec<f64> = u.iter().map(|v| (v - centre).abs()).collect();
+        for q in [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8] {
+            out.push(Term::DeadZone { centre, w: quantile(&dev, q) });
+        }
+    }
+    for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
+        out.push(Term::SaturationIn { lo: f64::NEG_INFINITY, hi: quantile(u, q) });
+        out.push(Term::SaturationIn { lo: quantile(u, 1.0 - q), hi: f64::INFINITY });
+        for &c in centres[1..4].iter().chain([&mean]) {
+            let a = quantile(&u.iter().map(|v| (v - c).abs()).collect::<Vec<_>>(), q);
+            out.push(Term::SaturationIn { lo: c - a, hi: c + a });
+        }
+        out.push(Term::SaturationOut { lo: f64::NEG_INFINITY, hi: quantile(s, q) });
+        out.push(Term::SaturationOut { lo: quantile(s, 1.0 - q), hi: f64::INFINITY });
+    }
+    out.push(Term::Quadratic);
+    out.push(Term::Cubic);
+    out.push(Term::CubicOut);
+    let sd = (u.iter().map(|v| v * v).sum::<f64>() / u.len().max(1) as f64).sqrt();
+    for f in [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.3, 1.6, 2.0] {
+        out.push(Term::Backlash(f * sd));
+    }
+    out.push(Term::Coulomb { on_change: false });
+    out.push(Term::Coulomb { on_change: true });
+    let mut offs = vec![0.0];
+    offs.extend([0.1, 0.25, 0.5, 0.75, 0.9].iter().map(|&q| quantile(s, q)));
+    out.extend(offs.into_iter().map(Term::AbsSensor));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn play_holds_inside_the_gap() {
+        let p = play(&[0.0, 0.4, 1.0, 0.8, 0.2, -1.0], 1.0);
+        assert_eq!(p, vec![0.0, 0.0, 0.5, 0.5, 0.5, -0.5]);
+    }
+}
+
+/// `B(q⁻¹)/(1 − pole·q⁻¹)` applied to `x`, started in steady state (the grids' poles are in
+/// [0, 1), so the filter exists; a non-finite coefficient gives a zero column that no fit uses).
+fn first_order(b: Vec<f64>, pole: f64, x: &[f64]) -> Vec<f64> {
+    DiscreteTf::new(b, vec![1.0, -pole], 0).map_or_else(|_| vec![0.0; x.len()], |g| g.simulate_from_rest(x))
+}

@@ -1,0 +1,151 @@
+//! The nominal model as the simulation shows it. `diagnose` receives only the simulated outputs,
+//! not the model, yet every physics hypothesis is stated against that model ("the gain of the
+//! u1→y2 channel is 30 % higher", "u1 passes through a dead zone before the model's dynamics").
+//! A simulation driven by the recorded inputs is a noise-free input–output record of the model,
+//! so a MISO ARX model fitted to it by least squares recovers a linear nominal model exactly and
+//! a nonlinear one approximately; each channel's filter `B_i/A` then carries any signal through
+//! "the model's dynamics of channel i→j".
+
+use mpmwatch_core::model::{Arx, ArxOrders, DiscreteTf};
+use mpmwatch_core::numerics::{minus_median, rms};
+
+use super::fitness::fit_pct;
+
+/// A MISO ARX model `A(q⁻¹) s(t) = Σ_i B_i(q⁻¹) u_i(t) + c` of one simulated output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NominalArx {
+    /// The identified model (no dead times: leading zero coefficients of `B_i` carry them).
+    pub arx: Arx,
+    /// FIT% of the ARX simulation against the given simulated output (100 for a linear model).
+    pub fit_pct: f64,
+}
+
+impl NominalArx {
+    /// Input i's transfer function `B_i/A`.
+    pub fn tf(&self, i: usize) -> DiscreteTf {
+        self.arx.channel(i).unwrap_or_else(|_| unreachable_channel())
+    }
+
+    /// Input i's contribution to the output (no constant): the channel's filter applied to `x`,
+    /// started in steady state at `x(0)`.
+    pub fn channel(&self, i: usize, x: &[f64]) -> Vec<f64> {
+        self.tf(i).simulate_from_rest(x)
+    }
+
+    /// Whether input i reaches this output at all in the model: its contribution to `u` is
+    /// below 1e-6 of the whole simulated output's spread.
+    pub fn has_channel(&self, i: usize, u: &[f64], s: &[f64]) -> bool {
+        let c = self.channel(i, &minus_median(u));
+        rms(&c) > 1e-6 * rms(&minus_median(s)).max(1e-300)
+    }
+
+    /// DC gain of channel i.
+    pub fn dc_gain(&self, i: usize) -> f64 {
+        self.arx.numerator(i).iter().sum::<f64>() / self.arx.denominator().iter().sum::<f64>()
+    }
+
+    /// Dominant pole of channel i: the real pole of a first-order fit of the channel's step
+    /// response, clamped to (0, 0.999).
+    pub fn dominant_pole(&self, i: usize, n: usize) -> f64 {
+        let mut x = vec![1.0; n.max(20)];
+        x[0] = 0.0;
+        let step = self.channel(i, &x);
+        let fin = *step.last().unwrap_or(&0.0);
+        if fin.abs() < 1e-300 {
+            return 0.5;
+        }
+        // Time to 63 % of the final value, counted from the first move (dead time excluded).
+        let start = step.iter().position(|v| (v / fin).abs() > 1e-9).unwrap_or(0);
+        let t63 = step.iter().position(|v| v / fin >= 1.0 - (-1.0f64).exp()).unwrap_or(step.len() - 1);
+        let tau = (t63.saturating_sub(start) as f64).max(0.3);
+        (-1.0 / tau).exp().clamp(1e-3, 0.999)
+    }
+
+    /// Pure delay of channel i in samples (leading zero numerator coefficients).
+    pub fn delay(&self, i: usize) -> usize {
+        let b = self.arx.numerator(i);
+        let m = b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        b.iter().position(|v| v.abs() > 1e-6 * m).unwrap_or(0)
+    }
+
+    /// Simulates the model from the inputs, started in steady state.
+    pub fn simulate(&self, u: &[&[f64]]) -> Vec<f64> {
+        let u0: Vec<f64> = u.iter().map(|x| x.first().copied().unwrap_or(0.0)).collect();
+        let rest = self.arx.rest_output(&u0);
+        let y0 = if rest.is_finite() { rest } else { 0.0 };
+        self.arx.simulate_from(u, y0).unwrap_or_else(|_| vec![f64::NAN; u.first().map_or(0, |x| x.len())])
+    }
+}
+
+/// The identified models have one numerator per input by construction.
+fn unreachable_channel() -> DiscreteTf {
+    DiscreteTf::gain(0.0).expect("a zero gain is a valid transfer function")
+}
+
+/// Fits the nominal model of one simulated output `s` from the inputs `u`, over orders
+/// `na ≤ 4`, `nb ≤ 12`, choosing by simulation-mode error with a BIC penalty on `rows`.
+pub fn identify(u: &[&[f64]], s: &[f64], rows: std::ops::Range<usize>) -> NominalArx {
+    let mut best: Option<(f64, NominalArx)> = None;
+    let scale = rms(&minus_median(&s[rows.clone()])).max(1e-300);
+    for na in 0..=4usize {
+        for nb in [1usize, 2, 3, 4, 6, 8, 10, 12] {
+            let lag = na.max(nb);
+            if rows.len() < 4 * (na + nb * u.len() + 1) + lag {
+                continue;
+            }
+            let orders = ArxOrders { na, nb, delays: Vec::new() };
+            let Some(arx) = Arx::fit(s, u, &orders, (rows.start + lag)..rows.end) else { continue };
+            if !stable(arx.denominator()) {
+                continue;
+            }
+            let m = NominalArx { arx, fit_pct: 0.0 };
+            let sim = m.simulate(u);
+            let err: f64 = rows.clone().map(|t| (s[t] - sim[t]).powi(2)).sum::<f64>() / rows.len() as f64;
+            let p = (na + nb * u.len() + 1) as f64;
+            // Relative error floored at 1e-12: an exact fit stops the search for higher orders.
+            let score =
+                rows.len() as f64 * (err / (scale * scale)).max(1e-12).ln() + p * (rows.len() as f64).ln();
+            if best.as_ref().is_none_or(|b| score < b.0) {
+                best =
+                    Some((score, NominalArx { fit_pct: fit_pct(&s[rows.clone()], &sim[rows.clone()]), ..m }));
+            }
+        }
+    }
+    best.map(|b| b.1).unwrap_or_else(|| NominalArx {
+        arx: Arx::new(vec![1.0], vec![vec![0.0]; u.len()], vec![0; u.len()])
+            .expect("a zero model is a valid ARX model"),
+        fit_pct: f64::NAN,
+    })
+}
+
+/// Stable when the impulse response of `1/A` decays (checked over a long horizon; cheap and
+/// exact enough for the orders used here).
+fn stable(a: &[f64]) -> bool {
+    if a.len() <= 1 {
+        return true;
+    }
+    let mut x = vec![0.0; 4000];
+    x[0] = 1.0;
+    let Ok(tf) = DiscreteTf::new(vec![1.0], a.to_vec(), 0) else { return false };
+    let h = tf.simulate_from_rest(&x);
+    let tail = h[3000..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    tail.is_finite() && tail < 1e-3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recovers_a_two_input_model_exactly() {
+        let u1: Vec<f64> = (0..400).map(|t| ((t * 7919) % 13) as f64 - 6.0).collect();
+        let u2: Vec<f64> = (0..400).map(|t| ((t * 104729) % 7) as f64 - 3.0).collect();
+        let y1 = DiscreteTf::new(vec![0.0, 0.0, 0.2], vec![1.0, -0.8], 0).unwrap().simulate_from_rest(&u1);
+        let y2 = DiscreteTf::new(vec![0.0, 0.5], vec![1.0, -0.5], 0).unwrap().simulate_from_rest(&u2);
+        let s: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a + b + 1.0).collect();
+        let m = identify(&[&u1, &u2], &s, 0..400);
+        assert!(m.fit_pct > 99.9, "{m:?}");
+        assert!((m.dc_gain(0) - 1.0).abs() < 1e-6 && (m.dc_gain(1) - 1.0).abs() < 1e-6, "{m:?}");
+        assert_eq!(m.delay(0), 2);
+    }
+}

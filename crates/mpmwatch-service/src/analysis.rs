@@ -1,0 +1,302 @@
+//! One analysis run on a window snapshot, and the report it produces (what `/matrix`, the zenoh
+//! `matrix` key and the status page show). Synchronous and CPU-bound: the scheduler calls it in
+//! the blocking pool.
+
+use std::f64::consts::LN_2;
+use std::sync::Arc;
+
+use serde::Serialize;
+
+use mpmwatch_core::detect::{self, Cell, LagChoice, MatrixOptions, MatrixResult, Signal, Verdict};
+use mpmwatch_core::info::{Lags, MiOptions, SurrogateOptions};
+
+use super::config::ControllerConfig;
+use super::window::{Insufficient, Snapshot};
+
+/// Outcome of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    /// Analysed.
+    Ok,
+    /// Not enough contiguous data: not analysed.
+    InsufficientData,
+    /// The estimator refused the data (e.g. a constant residual); the message says why.
+    Error,
+}
+
+impl RunStatus {
+    /// The metric label.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Ok => "ok",
+            Self::InsufficientData => "insufficient_data",
+            Self::Error => "error",
+        }
+    }
+}
+
+/// One channel of the matrix, in bits.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSummary {
+    /// MV tag.
+    pub mv: String,
+    /// Dither tag.
+    pub dither: String,
+    /// CV tag.
+    pub cv: String,
+    /// MV index.
+    pub mv_index: usize,
+    /// CV index.
+    pub cv_index: usize,
+    /// Norm of MI (eq 19), bits.
+    pub norm_bits: f64,
+    /// Its critical value μ + zσ, bits.
+    pub critical_bits: f64,
+    /// The matrix element (eq 21): the statistic when significant, else 0; bits.
+    pub value_bits: f64,
+    /// Significant on the norm, on one lag, or on the joint embedding.
+    pub significant: bool,
+    /// The statistic that decided (`norm_mi`, `lag_mi`, `joint_mi`).
+    pub statistic: String,
+    /// Its value, bits.
+    pub statistic_bits: f64,
+    /// Its critical value, bits.
+    pub statistic_critical_bits: f64,
+    /// Lag whose MI exceeds its own critical value the most.
+    pub peak_lag: Option<usize>,
+    /// Empirical p-value of the norm.
+    pub p_value: f64,
+    /// `mismatch`, `clean` or `implicated_by_feedback`.
+    pub verdict: String,
+    /// Why, in one line.
+    pub reason: String,
+}
+
+/// The result of one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunReport {
+    /// Controller id.
+    pub controller: String,
+    /// Outcome.
+    pub status: RunStatus,
+    /// Why it is not `ok`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
+    /// Wall-clock time of the run, RFC 3339.
+    pub time: String,
+    /// Wall time the run took, seconds.
+    pub duration_s: f64,
+    /// Samples analysed (or available, when insufficient).
+    pub n: usize,
+    /// Samples needed.
+    pub needed: usize,
+    /// Source time of the first and last samples analysed, seconds.
+    pub first_time: Option<f64>,
+    /// See `first_time`.
+    pub last_time: Option<f64>,
+    /// Any channel significant (Proposition 1).
+    pub mismatch: bool,
+    /// MV tags.
+    pub mv: Vec<String>,
+    /// Dither tags.
+    pub dither: Vec<String>,
+    /// CV tags.
+    pub cv: Vec<String>,
+    /// Surrogates per element and the σ multiplier.
+    pub surrogates: usize,
+    /// σ multiplier.
+    pub sigma: f64,
+    /// Channels, row-major (cv, then mv).
+    pub channels: Vec<ChannelSummary>,
+    /// The full result (profiles), for `/profile`.
+    #[serde(skip)]
+    pub result: Option<Arc<MatrixResult>>,
+}
+
+/// The matrix options of a controller.
+pub fn options(c: &ControllerConfig) -> MatrixOptions {
+    MatrixOptions {
+        lags: LagChoice::Fixed(Lags { min: c.lag_min, max: c.lag_max }),
+        mi: MiOptions::with_k(c.k),
+        surrogates: SurrogateOptions {
+            count: c.surrogates,
+            z: c.sigma,
+            seed: c.seed,
+            ..SurrogateOptions::default()
+        },
+        joint_embedding: c.joint_embedding,
+        // Pre-whitening, partialling out the other dithers and the CCF's family-wise limits
+        // keep the defaults of `analyze`, so the monitor and the offline verb agree.
+        ..MatrixOptions::default()
+    }
+}
+
+impl RunReport {
+    fn empty(c: &ControllerConfig, status: RunStatus, time: String) -> Self {
+        Self {
+            controller: c.id.clone(),
+            status,
+            message: None,
+            time,
+            duration_s: 0.0,
+            n: 0,
+            needed: c.min_samples,
+            first_time: None,
+            last_time: None,
+            mismatch: false,
+            mv: c.mv.clone(),
+            dither: c.dither.clone(),
+            cv: c.cv.clone(),
+            surrogates: c.surrogates,
+            sigma: c.sigma,
+            channels: Vec::new(),
+            result: None,
+        }
+    }
+
+    /// The report of a window that cannot be analysed.
+    pub fn insufficient(c: &ControllerConfig, why: Insufficient, time: String) -> Self {
+        Self {
+            message: Some(format!(
+                "{} contiguous samples, {} needed: not analysed",
+                why.contiguous, why.needed
+            )),
+            n: why.contiguous,
+            ..Self::empty(c, RunStatus::InsufficientData, time)
+        }
+    }
+
+    /// The channel of MV (or dither) tag `mv` and CV tag `cv`.
+    pub fn channel(&self, mv: &str, cv: &str) -> Option<&ChannelSummary> {
+        self.channels.iter().find(|ch| (ch.mv == mv || ch.dither == mv) && ch.cv == cv)
+    }
+
+    /// The detect cell behind a channel.
+    pub fn cell(&self, ch: &ChannelSummary) -> Option<&Cell> {
+        self.result.as_ref()?.cell(ch.mv_index, ch.cv_index)
+    }
+}
+
+/// Analyses a snapshot. Never panics on data: estimator errors become `status: error`.
+pub fn run(c: &ControllerConfig, snap: &Snapshot, time: String) -> RunReport {
+    let dithers: Vec<Signal<'_>> =
+        c.dither.iter().zip(&snap.dither).map(|(name, v)| Signal { name, values: v }).collect();
+    let residuals: Vec<Signal<'_>> =
+        c.cv.iter().zip(&snap.residual).map(|(name, v)| Signal { name, values: v }).collect();
+    let base = RunReport {
+        n: snap.dither.first().map_or(0, Vec::len),
+        first_time: Some(snap.first_slot as f64 * c.period),
+        last_time: Some(snap.last_slot as f64 * c.period),
+        ..RunReport::empty(c, RunStatus::Ok, time)
+    };
+    match detect::analyze(&dithers, &residuals, &options(c)) {
+        Ok(result) => RunReport {
+            mismatch: result.mismatch,
+            channels: summarise(c, &result),
+            result: Some(Arc::new(result)),
+            ..base
+        },
+        Err(e) => RunReport { status: RunStatus::Error, message: Some(e.to_string()), ..base },
+    }
+}
+
+fn bits(nats: f64) -> f64 {
+    nats / LN_2
+}
+
+fn verdict_name(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Mismatch => "mismatch",
+        Verdict::Clean => "clean",
+        Verdict::ImplicatedByFeedback => "implicated_by_feedback",
+    }
+}
+
+fn summarise(c: &ControllerConfig, r: &MatrixResult) -> Vec<ChannelSummary> {
+    r.cells
+        .iter()
+        .map(|cell| {
+            let p = &cell.pairwise;
+            let ch = r.channels.iter().find(|ch| ch.mv_index == cell.mv && ch.cv_index == cell.cv);
+            let (statistic, value, critical) = if p.norm_significant {
+                ("norm_mi", p.norm, p.threshold.critical)
+            } else if let Some(lag) = p.peak_lag
+                && let Some(k) = p.lags.iter().position(|&l| l == lag)
+            {
+                ("lag_mi", p.profile[k], p.lag_critical[k])
+            } else if let Some(j) = cell.joint.as_ref().filter(|j| j.significant) {
+                ("joint_mi", j.norm, j.threshold.critical)
+            } else {
+                ("norm_mi", p.norm, p.threshold.critical)
+            };
+            ChannelSummary {
+                mv: c.mv[cell.mv].clone(),
+                dither: c.dither[cell.mv].clone(),
+                cv: c.cv[cell.cv].clone(),
+                mv_index: cell.mv,
+                cv_index: cell.cv,
+                norm_bits: bits(p.norm),
+                critical_bits: bits(p.threshold.critical),
+                value_bits: bits(cell.value),
+                significant: cell.significant,
+                statistic: statistic.into(),
+                statistic_bits: bits(value),
+                statistic_critical_bits: bits(critical),
+                peak_lag: p.peak_lag,
+                p_value: p.p_value,
+                verdict: ch.map_or("clean", |ch| verdict_name(ch.verdict)).into(),
+                reason: ch.map(|ch| ch.reason.clone()).unwrap_or_default(),
+            }
+        })
+        .collect()
+}
+
+/// MI and critical value against lag of one channel (`/profile`), bits.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Profile {
+    /// Controller id.
+    pub controller: String,
+    /// MV tag.
+    pub mv: String,
+    /// Dither tag.
+    pub dither: String,
+    /// CV tag.
+    pub cv: String,
+    /// Lags.
+    pub lags: Vec<usize>,
+    /// MI of dither(t) and residual(t + lag), bits.
+    pub mi_bits: Vec<f64>,
+    /// Per-lag surrogate critical values, bits.
+    pub critical_bits: Vec<f64>,
+    /// Norm of MI and its critical value, bits.
+    pub norm_bits: f64,
+    /// See `norm_bits`.
+    pub norm_critical_bits: f64,
+    /// Cross-correlation at the same lags, and its ± limit.
+    pub ccf: Vec<f64>,
+    /// See `ccf`.
+    pub ccf_limit: f64,
+    /// Time of the run.
+    pub time: String,
+}
+
+/// The profile of one channel of a report.
+pub fn profile(report: &RunReport, ch: &ChannelSummary) -> Option<Profile> {
+    let cell = report.cell(ch)?;
+    let p = &cell.pairwise;
+    Some(Profile {
+        controller: report.controller.clone(),
+        mv: ch.mv.clone(),
+        dither: ch.dither.clone(),
+        cv: ch.cv.clone(),
+        lags: p.lags.clone(),
+        mi_bits: p.profile.iter().map(|v| bits(*v)).collect(),
+        critical_bits: p.lag_critical.iter().map(|v| bits(*v)).collect(),
+        norm_bits: bits(p.norm),
+        norm_critical_bits: bits(p.threshold.critical),
+        ccf: cell.ccf.values.clone(),
+        ccf_limit: cell.ccf.limit,
+        time: report.time.clone(),
+    })
+}

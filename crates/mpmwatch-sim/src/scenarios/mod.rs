@@ -1,0 +1,455 @@
+//! Concealed-mismatch scenarios for the diagnosis casebook: closed loops (diagonal PI control,
+//! a dither on every MV, coloured output disturbances) of 1×1, 2×2 or 3×3 first-order-plus-dead-
+//! time plants in which exactly one effect is hidden from the nominal model.
+//!
+//! "Concealed" means the effect's contribution to the residual has 0.1–0.8 of the variance of
+//! the disturbance's: the strength of each effect is found by bisection on that ratio with the
+//! noise and dither fixed. Nonlinearities act around the operating point (MV 0), so for even
+//! ones (quadratic, bilinear) the linear cross-correlation with the dither has nothing to see.
+//! In a MIMO plant the nonlinearity sits in the path of the one channel named (a valve in that
+//! path), not on the whole actuator, so the truth is one channel. Pure and seeded.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use super::{Excitation, SimError, white_gaussian};
+
+/// Standard deviation of every dither. Large against the disturbance (0.3) so that most of an
+/// effect on the input side is driven by the dither, which is what makes it detectable at all;
+/// the effect stays concealed in the residual by its size against the disturbance.
+pub const DITHER_STD: f64 = 1.0;
+
+/// The hidden effect of a scenario, named as in the diagnosis vocabulary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    /// Model and plant agree; ordinary disturbance.
+    NoChange,
+    /// Model and plant agree; the disturbance is slower and larger than usual.
+    DisturbanceOnly,
+    /// Channel gain off.
+    Gain,
+    /// Channel time constant off (slower plant).
+    TimeConstant,
+    /// Extra dead time.
+    DeadTime,
+    /// The model has no such channel; the plant does.
+    MissingCoupling,
+    /// Dead zone around the operating point.
+    DeadZone,
+    /// Symmetric limit on the channel's input.
+    Saturation,
+    /// `u + q·(u² − E u²)`, centred on the loop's mean square input.
+    Quadratic,
+    /// `u + c·u³` on the input.
+    Cubic,
+    /// A hardening spring: `−k·x³` fed back into the channel's input.
+    CubicOutput,
+    /// `u(t) + b·u(t)·u(t−1)`.
+    Bilinear,
+    /// Play of width w.
+    Backlash,
+    /// `−F·sign(x)` fed back into the channel's input (x a velocity).
+    CoulombFriction,
+    /// The sensor reads |x|.
+    AbsSensor,
+}
+
+impl Effect {
+    /// The diagnosis vocabulary name of the class (`none` for no-change and disturbance-only).
+    pub fn physics(self) -> &'static str {
+        match self {
+            Effect::NoChange | Effect::DisturbanceOnly => "none",
+            Effect::Gain => "gain",
+            Effect::TimeConstant => "time_constant",
+            Effect::DeadTime => "dead_time",
+            Effect::MissingCoupling => "missing_coupling",
+            Effect::DeadZone => "dead_zone",
+            Effect::Saturation => "saturation",
+            Effect::Quadratic => "quadratic",
+            Effect::Cubic | Effect::CubicOutput => "cubic",
+            Effect::Bilinear => "bilinear",
+            Effect::Backlash => "backlash",
+            Effect::CoulombFriction => "coulomb_friction",
+            Effect::AbsSensor => "abs_sensor",
+        }
+    }
+
+    /// Whether a diagnosis should find something.
+    pub fn is_mismatch(self) -> bool {
+        !matches!(self, Effect::NoChange | Effect::DisturbanceOnly)
+    }
+}
+
+/// One scenario.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScenarioSpec {
+    /// Case name.
+    pub name: String,
+    /// The hidden effect.
+    pub effect: Effect,
+    /// Plant size (1, 2 or 3 MVs and CVs).
+    pub size: usize,
+    /// The affected channel `(input, output)`, 0-based.
+    pub channel: (usize, usize),
+    /// `prbs` (binary) or `uniform` dithers.
+    #[serde(serialize_with = "ser_exc")]
+    pub excitation: Excitation,
+    /// Samples.
+    pub n: usize,
+    /// Seed of dithers and disturbances.
+    pub seed: u64,
+    /// Target ratio of effect to disturbance variance in the residual.
+    pub target_ratio: f64,
+}
+
+fn ser_exc<S: serde::Serializer>(e: &Excitation, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(match e {
+        Excitation::Prbs => "binary",
+        Excitation::Uniform => "uniform",
+        Excitation::Multilevel => "multilevel",
+        Excitation::Gaussian => "gaussian",
+    })
+}
+
+/// A simulated record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioRecord {
+    /// MVs (controller output plus dither).
+    pub u: Vec<Vec<f64>>,
+    /// Dithers.
+    pub d: Vec<Vec<f64>>,
+    /// Measured CVs.
+    pub y: Vec<Vec<f64>>,
+    /// Nominal model driven by the recorded MVs.
+    pub s: Vec<Vec<f64>>,
+    /// Measured variance ratio of the effect to the disturbance in the affected residual.
+    pub effect_ratio: f64,
+    /// The effect's strength parameter (see [`describe`]).
+    pub strength: f64,
+}
+
+/// A first-order-plus-dead-time channel `x(t) = a·x(t−1) + K(1−a)·w(t−1−d)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Fopdt {
+    k: f64,
+    a: f64,
+    d: usize,
+}
+
+fn nominal(size: usize, i: usize, j: usize) -> Fopdt {
+    if i == j {
+        Fopdt { k: 1.0, a: [0.8, 0.75, 0.85][j % 3], d: 1 + j % 2 }
+    } else {
+        Fopdt { k: if size == 2 { 0.4 } else { 0.3 }, a: 0.7, d: 2 }
+    }
+}
+
+/// The strength's meaning per effect, in words (for reports).
+pub fn describe(effect: Effect, strength: f64) -> String {
+    match effect {
+        Effect::NoChange => "model exact, AR(1) disturbance pole 0.9".into(),
+        Effect::DisturbanceOnly => "model exact, disturbance changed to pole 0.97 and 2× the std".into(),
+        Effect::Gain => format!("gain ×{:.2}", 1.0 + strength),
+        Effect::TimeConstant => format!("time constant ×{:.2}", 1.0 + 3.0 * strength),
+        Effect::DeadTime => format!("+{strength:.0} samples dead time"),
+        Effect::MissingCoupling => format!("unmodelled channel, gain {strength:.2}"),
+        Effect::DeadZone => format!("dead zone ±{:.2}", 2.0 * strength),
+        Effect::Saturation => format!("input limit ±{:.2}", sat_limit(strength)),
+        Effect::Quadratic => format!("u + {strength:.3}·(u² − E u²)"),
+        Effect::Cubic => format!("u + {strength:.3}·u³"),
+        Effect::CubicOutput => format!("spring −{strength:.3}·x³"),
+        Effect::Bilinear => format!("u + {strength:.3}·u(t)·u(t−1)"),
+        Effect::Backlash => format!("backlash width {:.2}", 2.0 * strength),
+        Effect::CoulombFriction => format!("Coulomb friction {strength:.3}"),
+        Effect::AbsSensor => format!("|x| sensor, set point {:.2}", abs_sp(strength)),
+    }
+}
+
+fn sat_limit(t: f64) -> f64 {
+    2.0 * (1.0 - t) + 0.02
+}
+
+fn abs_sp(t: f64) -> f64 {
+    1.5 * (1.0 - t)
+}
+
+/// Runs a scenario: finds the strength that conceals the effect at the target ratio and returns
+/// that record.
+pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
+    if !(1..=3).contains(&spec.size) || spec.channel.0 >= spec.size || spec.channel.1 >= spec.size {
+        return Err(SimError::parameter(
+            "scenario size/channel",
+            spec.size,
+            "size 1..=3 with the channel inside it",
+        ));
+    }
+    if spec.effect == Effect::MissingCoupling && spec.channel.0 == spec.channel.1 {
+        return Err(SimError::parameter("missing coupling channel", spec.channel.0, "must be off-diagonal"));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+    let d = spec.excitation.generate_many(spec.n, spec.size, DITHER_STD, &mut rng)?;
+    let slow = spec.effect == Effect::DisturbanceOnly;
+    let e: Vec<Vec<f64>> =
+        (0..spec.size).map(|_| white_gaussian(spec.n + 200, 1.0, &mut rng)).collect::<Result<_, _>>()?;
+    let (pole, std): (f64, f64) = if slow { (0.97, 0.6) } else { (0.9, 0.3) };
+    let v: Vec<Vec<f64>> = e
+        .iter()
+        .map(|e| {
+            let mut x = 0.0;
+            let g = std * (1.0 - pole * pole).sqrt();
+            e.iter()
+                .map(|w| {
+                    x = pole * x + g * w;
+                    x
+                })
+                .skip(200)
+                .collect()
+        })
+        .collect();
+    if !spec.effect.is_mismatch() {
+        return Ok(simulate(spec, 0.0, &d, &v));
+    }
+    if spec.effect == Effect::DeadTime {
+        let mut best: Option<ScenarioRecord> = None;
+        for extra in 1..=6 {
+            let r = simulate(spec, extra as f64, &d, &v);
+            if best.as_ref().is_none_or(|b| {
+                (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs()
+            }) {
+                best = Some(r);
+            }
+        }
+        return Ok(best.expect("six candidates"));
+    }
+    let t_max = match spec.effect {
+        Effect::Gain => 2.0,
+        Effect::Quadratic | Effect::Cubic | Effect::Bilinear | Effect::CubicOutput => 3.0,
+        Effect::MissingCoupling => 2.0,
+        _ => 0.98,
+    };
+    let (mut lo, mut hi) = (0.0, t_max);
+    let mut best: Option<ScenarioRecord> = None;
+    let mut keep = |r: ScenarioRecord| {
+        if r.effect_ratio.is_finite()
+            && best.as_ref().is_none_or(|b| {
+                (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs()
+            })
+        {
+            best = Some(r);
+        }
+    };
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        let r = simulate(spec, mid, &d, &v);
+        let (ratio, done) =
+            (r.effect_ratio, (r.effect_ratio - spec.target_ratio).abs() < 0.01 * spec.target_ratio);
+        keep(r);
+        if done {
+            break;
+        }
+        if !ratio.is_finite() || ratio > spec.target_ratio {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    best.ok_or_else(|| SimError::parameter("scenario strength", spec.effect.physics(), "no finite run found"))
+}
+
+/// One closed-loop run at strength `t`.
+///
+/// The quadratic is centred on the loop's own mean square input, `q·(u² − E u²)`, found by a
+/// fixed-point iteration (three runs; the mean square moves by well under 1 % after the second):
+/// uncentred, its mean would make the integral action shift the MV's operating point, and about
+/// a shifted operating point `u²` has a linear part that the cross-correlation sees. Centred,
+/// the effect is even about the operating point, as the casebook's definition of concealed asks.
+fn simulate(spec: &ScenarioSpec, t: f64, d: &[Vec<f64>], v: &[Vec<f64>]) -> ScenarioRecord {
+    if spec.effect != Effect::Quadratic {
+        return simulate_centred(spec, t, 0.0, d, v);
+    }
+    let mut q0 = DITHER_STD * DITHER_STD;
+    let mut rec = simulate_centred(spec, t, q0, d, v);
+    for _ in 0..2 {
+        let u = &rec.u[spec.channel.0];
+        q0 = u.iter().map(|x| x * x).sum::<f64>() / u.len().max(1) as f64;
+        rec = simulate_centred(spec, t, q0, d, v);
+    }
+    rec
+}
+
+#[allow(clippy::needless_range_loop)]
+fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[Vec<f64>]) -> ScenarioRecord {
+    let (m, n) = (spec.size, spec.n);
+    let (ci, cj) = spec.channel;
+    let eff = spec.effect;
+    let mut plant = vec![vec![nominal(m, 0, 0); m]; m];
+    let mut model = plant.clone();
+    for j in 0..m {
+        for i in 0..m {
+            plant[j][i] = nominal(m, i, j);
+            model[j][i] = nominal(m, i, j);
+        }
+    }
+    match eff {
+        Effect::Gain => plant[cj][ci].k *= 1.0 + t,
+        Effect::TimeConstant => {
+            let tau = -1.0 / model[cj][ci].a.ln();
+            plant[cj][ci].a = (-1.0 / (tau * (1.0 + 3.0 * t))).exp();
+        }
+        Effect::DeadTime => plant[cj][ci].d += t as usize,
+        Effect::MissingCoupling => {
+            model[cj][ci].k = 0.0;
+            plant[cj][ci].k = t;
+        }
+        _ => {}
+    }
+    let sp: Vec<f64> =
+        (0..m).map(|j| if eff == Effect::AbsSensor && j == cj { abs_sp(t) } else { 0.0 }).collect();
+    let mut u = vec![vec![0.0; n]; m];
+    let mut uc = vec![0.0; m];
+    let mut e_prev = vec![0.0; m];
+    let mut w = vec![vec![vec![0.0; n]; m]; m]; // plant channel inputs w[j][i]
+    let mut xs = vec![vec![vec![0.0; n]; m]; m];
+    let mut x = vec![vec![0.0; n]; m];
+    let mut y = vec![vec![0.0; n]; m];
+    let mut bl = 0.0;
+    let step = |c: &Fopdt, hist: &[f64], prev: f64, t: usize| {
+        let inp = if t > c.d { hist[t - 1 - c.d] } else { 0.0 };
+        c.a * prev + c.k * (1.0 - c.a) * inp
+    };
+    for k in 0..n {
+        for j in 0..m {
+            let mut sum = 0.0;
+            for i in 0..m {
+                let prev = if k > 0 { xs[j][i][k - 1] } else { 0.0 };
+                xs[j][i][k] = step(&plant[j][i], &w[j][i], prev, k);
+                sum += xs[j][i][k];
+            }
+            x[j][k] = sum;
+            let h = if eff == Effect::AbsSensor && j == cj { sum.abs() } else { sum };
+            y[j][k] = h + v[j][k];
+        }
+        for j in 0..m {
+            // Diagonal PI, velocity form, mild tuning (Kc 0.3, Ti = the diagonal time constant).
+            let ti = -1.0 / plant[j][j].a.ln().min(-1e-3);
+            let err = sp[j] - y[j][k];
+            uc[j] += 0.3 * (err - e_prev[j] + err / ti);
+            e_prev[j] = err;
+            u[j][k] = uc[j] + d[j][k];
+        }
+        for j in 0..m {
+            for i in 0..m {
+                let ui = u[i][k];
+                let mut wi = ui;
+                if (i, j) == (ci, cj) {
+                    let up = if k > 0 { u[i][k - 1] } else { 0.0 };
+                    wi = match eff {
+                        Effect::DeadZone => {
+                            let wd = 2.0 * t;
+                            ui.signum() * (ui.abs() - wd).max(0.0)
+                        }
+                        Effect::Saturation => ui.clamp(-sat_limit(t), sat_limit(t)),
+                        Effect::Quadratic => ui + t * (ui * ui - q0),
+                        Effect::Cubic => ui + t * ui * ui * ui,
+                        Effect::Bilinear => ui + t * ui * up,
+                        Effect::Backlash => {
+                            let h = t;
+                            if ui > bl + h {
+                                bl = ui - h;
+                            } else if ui < bl - h {
+                                bl = ui + h;
+                            }
+                            bl
+                        }
+                        Effect::CubicOutput => ui - t * x[cj][k].powi(3),
+                        Effect::CoulombFriction => ui - t * x[cj][k].signum(),
+                        _ => ui,
+                    };
+                }
+                w[j][i][k] = wi;
+            }
+        }
+    }
+    // Nominal model driven by the recorded MVs.
+    let mut s = vec![vec![0.0; n]; m];
+    for j in 0..m {
+        for i in 0..m {
+            let c = model[j][i];
+            let mut prev = 0.0;
+            for k in 0..n {
+                prev = step(&c, &u[i], prev, k);
+                s[j][k] += prev;
+            }
+        }
+    }
+    let effect: Vec<f64> = (0..n).map(|k| y[cj][k] - v[cj][k] - s[cj][k]).collect();
+    let ratio = var(&effect[100..]) / var(&v[cj][100..]).max(1e-300);
+    ScenarioRecord { u, d: d.to_vec(), y, s, effect_ratio: ratio, strength: t }
+}
+
+fn var(x: &[f64]) -> f64 {
+    let m = x.iter().sum::<f64>() / x.len() as f64;
+    x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len() as f64
+}
+
+/// The casebook's scenarios: every class twice (cubic once on the input, once as a spring on the
+/// output), two disturbance-only and two no-change cases; SISO, 2×2 and 3×3; binary and uniform
+/// dithers; target ratios spread over 0.15–0.6. `n` samples each, seeds from `seed`.
+pub fn casebook_specs(n: usize, seed: u64) -> Vec<ScenarioSpec> {
+    use Effect::*;
+    type Row = (Effect, usize, (usize, usize), Excitation, f64);
+    let list: [Row; 28] = [
+        (Gain, 1, (0, 0), Excitation::Prbs, 0.3),
+        (Gain, 2, (1, 1), Excitation::Uniform, 0.5),
+        (TimeConstant, 1, (0, 0), Excitation::Uniform, 0.4),
+        (TimeConstant, 3, (2, 2), Excitation::Prbs, 0.6),
+        (DeadTime, 1, (0, 0), Excitation::Prbs, 0.4),
+        (DeadTime, 2, (0, 0), Excitation::Uniform, 0.5),
+        (MissingCoupling, 2, (0, 1), Excitation::Prbs, 0.3),
+        (MissingCoupling, 3, (2, 0), Excitation::Uniform, 0.5),
+        (DeadZone, 1, (0, 0), Excitation::Prbs, 0.4),
+        (DeadZone, 2, (1, 1), Excitation::Uniform, 0.6),
+        (Saturation, 1, (0, 0), Excitation::Uniform, 0.4),
+        (Saturation, 3, (0, 0), Excitation::Prbs, 0.6),
+        (Quadratic, 1, (0, 0), Excitation::Uniform, 0.4),
+        (Quadratic, 2, (0, 0), Excitation::Uniform, 0.6),
+        (Cubic, 1, (0, 0), Excitation::Uniform, 0.4),
+        (CubicOutput, 2, (1, 1), Excitation::Prbs, 0.5),
+        (Bilinear, 1, (0, 0), Excitation::Uniform, 0.4),
+        (Bilinear, 3, (1, 1), Excitation::Prbs, 0.6),
+        (Backlash, 1, (0, 0), Excitation::Uniform, 0.4),
+        (Backlash, 2, (0, 0), Excitation::Prbs, 0.6),
+        (CoulombFriction, 1, (0, 0), Excitation::Prbs, 0.4),
+        (CoulombFriction, 2, (1, 1), Excitation::Uniform, 0.6),
+        (AbsSensor, 1, (0, 0), Excitation::Prbs, 0.4),
+        (AbsSensor, 2, (0, 0), Excitation::Uniform, 0.6),
+        (DisturbanceOnly, 1, (0, 0), Excitation::Prbs, 0.0),
+        (DisturbanceOnly, 3, (0, 0), Excitation::Uniform, 0.0),
+        (NoChange, 2, (0, 0), Excitation::Prbs, 0.0),
+        (NoChange, 1, (0, 0), Excitation::Uniform, 0.0),
+    ];
+    list.iter()
+        .enumerate()
+        .map(|(k, &(effect, size, channel, excitation, target_ratio))| ScenarioSpec {
+            name: format!(
+                "c{:02}_{}_{}x{}",
+                k + 1,
+                serde_json::to_value(effect)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default(),
+                size,
+                size
+            ),
+            effect,
+            size,
+            channel,
+            excitation,
+            n,
+            seed: seed + k as u64,
+            target_ratio,
+        })
+        .collect()
+}

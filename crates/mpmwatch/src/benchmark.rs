@@ -1,0 +1,146 @@
+//! Timings of the estimation core behind `mpmwatch bench`: what one estimate, one surrogate and
+//! one full 3×3 matrix cost at a given record length, on seeded synthetic data.
+
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use mpmwatch_core::detect::{MatrixOptions, Signal, analyze};
+use mpmwatch_core::info::{
+    Iaaft, IaaftOptions, InfoError, Lags, MiOptions, SurrogateOptions, lagged_test, mutual_information,
+};
+
+/// What to time.
+#[derive(Debug, Clone, Copy)]
+pub struct BenchOptions {
+    /// Record length N.
+    pub n: usize,
+    /// Repetitions of each single-estimate timing (the median is reported).
+    pub reps: usize,
+    /// Seed of the synthetic data.
+    pub seed: u64,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self { n: 2048, reps: 50, seed: 1 }
+    }
+}
+
+/// Measured timings, milliseconds.
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchReport {
+    /// Record length.
+    pub n: usize,
+    /// Neighbours.
+    pub k: usize,
+    /// Median time of one binary-dither (Ross path) estimate.
+    pub ksg_binary_ms: f64,
+    /// Median time of one continuous KSG1 estimate.
+    pub ksg_continuous_ms: f64,
+    /// Median time of one iAAFT surrogate of a continuous series.
+    pub iaaft_ms: f64,
+    /// Wall time of a 3×3 norm-of-MI matrix: binary dithers, lags 1..=20, 100 circular-shift
+    /// surrogates per element, all threads.
+    pub matrix_3x3_ms: f64,
+    /// Wall time of `detect::analyze` on the same 3×3 data with its defaults (pairwise and
+    /// joint-lag statistics, pre-whitening, partialling out the other dithers, CCF baseline):
+    /// what one scheduled run of the online monitor costs.
+    pub analyze_3x3_ms: f64,
+    /// Rayon threads used for the matrix.
+    pub threads: usize,
+    /// Seed of the synthetic data.
+    pub seed: u64,
+}
+
+fn median_ms(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+fn ar1(rng: &mut ChaCha8Rng, n: usize, a: f64) -> Vec<f64> {
+    let mut y = Vec::with_capacity(n);
+    let mut prev = 0.0;
+    for _ in 0..n {
+        let e: f64 = StandardNormal.sample(rng);
+        prev = a * prev + e;
+        y.push(prev);
+    }
+    y
+}
+
+/// Runs every timing. `progress` is told what is being timed (for a long run on a slow machine).
+pub fn run(opts: &BenchOptions, mut progress: impl FnMut(&str)) -> Result<BenchReport, InfoError> {
+    let n = opts.n;
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    let dithers: Vec<Vec<f64>> =
+        (0..3).map(|_| (0..n).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect()).collect();
+    let residuals: Vec<Vec<f64>> = (0..3)
+        .map(|j| {
+            let v = ar1(&mut rng, n, 0.7);
+            (0..n).map(|t| v[t] + if t > 0 && j == 0 { 0.3 * dithers[0][t - 1] } else { 0.0 }).collect()
+        })
+        .collect();
+    let continuous = ar1(&mut rng, n, 0.5);
+    let mi = MiOptions::default();
+
+    progress("one binary-dither estimate");
+    let mut sink = 0.0;
+    let ksg_binary_ms = median_ms(opts.reps, || {
+        sink += mutual_information(&dithers[0], &residuals[0], &mi).map(|e| e.nats).unwrap_or(0.0);
+    });
+    progress("one continuous estimate");
+    let ksg_continuous_ms = median_ms(opts.reps, || {
+        sink += mutual_information(&continuous, &residuals[1], &mi).map(|e| e.nats).unwrap_or(0.0);
+    });
+    progress("one iAAFT surrogate");
+    let generator = Iaaft::new(&residuals[1], IaaftOptions::default())?;
+    let iaaft_ms = median_ms(opts.reps.min(20), || {
+        sink += generator.generate(&mut rng).0[0];
+    });
+    progress("a 3x3 matrix, 20 lags, 100 surrogates per element");
+    let lags = Lags::new(1, 20)?;
+    let start = Instant::now();
+    let cells: Vec<(usize, usize)> = (0..3).flat_map(|j| (0..3).map(move |i| (i, j))).collect();
+    let tests = cells
+        .par_iter()
+        .map(|&(i, j)| {
+            let sur =
+                SurrogateOptions { seed: opts.seed + (3 * j + i) as u64, ..SurrogateOptions::default() };
+            lagged_test(&dithers[i], &residuals[j], lags, 1, &mi, &sur)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let matrix_3x3_ms = start.elapsed().as_secs_f64() * 1e3;
+    sink += tests.iter().map(|t| t.norm).sum::<f64>();
+    progress("the default analysis of a 3x3 loop (detect::analyze)");
+    let names = ["d1", "d2", "d3", "e1", "e2", "e3"];
+    let d: Vec<Signal> = (0..3).map(|i| Signal { name: names[i], values: &dithers[i] }).collect();
+    let r: Vec<Signal> = (0..3).map(|j| Signal { name: names[3 + j], values: &residuals[j] }).collect();
+    let start = Instant::now();
+    let m = analyze(&d, &r, &MatrixOptions::default())?;
+    let analyze_3x3_ms = start.elapsed().as_secs_f64() * 1e3;
+    sink += m.cells.len() as f64;
+    std::hint::black_box(sink);
+    Ok(BenchReport {
+        n,
+        k: mi.k,
+        ksg_binary_ms,
+        ksg_continuous_ms,
+        iaaft_ms,
+        matrix_3x3_ms,
+        analyze_3x3_ms,
+        threads: rayon::current_num_threads(),
+        seed: opts.seed,
+    })
+}

@@ -1,0 +1,234 @@
+//! `mpmwatch diagnose`: locate, name and fit the physics a simulation left out, and show the
+//! corrected simulation on a held-out tail.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use mpmwatch::report::figures::{XySeries, write_xy_chart};
+use mpmwatch_core::detect::Signal;
+use mpmwatch_core::info::Lags;
+use mpmwatch_core::io::Table;
+use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Scoring, diagnose};
+
+/// Arguments of the verb (documented on the verb in `main.rs`).
+#[derive(clap::Args)]
+pub struct Args {
+    /// CSV of the recording (first column `time`).
+    #[arg(long)]
+    recorded: PathBuf,
+    /// CSV of the simulation on the same time axis, one column per output named as in the
+    /// recording, driven by the recorded inputs.
+    #[arg(long)]
+    simulated: PathBuf,
+    /// Recorded input (MV) columns, comma separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    inputs: Vec<String>,
+    /// Dither columns, paired with --inputs by position (excitation i was added to input i).
+    /// Without it the inputs are their own excitation (open-loop records).
+    #[arg(long, value_delimiter = ',')]
+    excitations: Vec<String>,
+    /// Recorded output (CV) columns, comma separated; the simulation has the same names.
+    #[arg(long, value_delimiter = ',', required = true)]
+    outputs: Vec<String>,
+    /// Where to write the JSON report (DESIGN.md §4.5).
+    #[arg(long)]
+    report: PathBuf,
+    /// Where to write the corrected simulation (time plus one column per output).
+    #[arg(long)]
+    corrected: PathBuf,
+    /// Fraction of the record held out at its end; the fit never sees it.
+    #[arg(long, default_value_t = 0.3)]
+    holdout_fraction: f64,
+    /// Surrogates per MI element.
+    #[arg(long, default_value_t = 40)]
+    surrogates: usize,
+    /// Seed of the surrogates (reported in the JSON).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Largest lag of the MI profile.
+    #[arg(long, default_value_t = 15)]
+    tmax: usize,
+    /// Write a figure per output (recorded, simulated, corrected) into this folder.
+    #[arg(long)]
+    figures: Option<PathBuf>,
+    /// How hypotheses are compared in a closed loop (with --excitations). `prediction`: one-step
+    /// prediction error of the corrected residual under an AR noise model (consistent in closed
+    /// loop, the default); `shifted` and `projected`: the two earlier criteria, kept to compare.
+    #[arg(long, value_enum, default_value_t = ScoringArg::Prediction)]
+    scoring: ScoringArg,
+}
+
+/// `--scoring` values (kept out of the library, which has no command-line types).
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ScoringArg {
+    Prediction,
+    Shifted,
+    Projected,
+}
+
+impl From<ScoringArg> for Scoring {
+    fn from(s: ScoringArg) -> Self {
+        match s {
+            ScoringArg::Prediction => Scoring::Prediction,
+            ScoringArg::Shifted => Scoring::Shifted,
+            ScoringArg::Projected => Scoring::Projected,
+        }
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let rec = Table::read_csv(&args.recorded)?;
+    let sim = Table::read_csv(&args.simulated)?;
+    if rec.len() != sim.len() {
+        bail!(
+            "time axes do not match: {} has {} rows, {} has {}",
+            args.recorded.display(),
+            rec.len(),
+            args.simulated.display(),
+            sim.len()
+        );
+    }
+    if let Some(k) =
+        rec.time().iter().zip(sim.time()).position(|(a, b)| (a - b).abs() > 1e-9 * (1.0 + a.abs()))
+    {
+        bail!(
+            "time axes do not match at row {}: {} in {} but {} in {}",
+            k + 2,
+            rec.time()[k],
+            args.recorded.display(),
+            sim.time()[k],
+            args.simulated.display()
+        );
+    }
+    if !args.excitations.is_empty() && args.excitations.len() != args.inputs.len() {
+        bail!(
+            "--excitations has {} columns but --inputs has {}: they pair by position",
+            args.excitations.len(),
+            args.inputs.len()
+        );
+    }
+    let col = |t: &Table, name: &str, file: &Path| -> anyhow::Result<Vec<f64>> {
+        let v = t.column(name).with_context(|| format!("in {}", file.display()))?;
+        if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+            bail!(
+                "column `{name}` of {} has a non-finite value ({}) at line {}",
+                file.display(),
+                v[k],
+                k + 2
+            );
+        }
+        Ok(v.to_vec())
+    };
+    let u: Vec<Vec<f64>> =
+        args.inputs.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
+    let d: Vec<Vec<f64>> =
+        args.excitations.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
+    let y: Vec<Vec<f64>> =
+        args.outputs.iter().map(|n| col(&rec, n, &args.recorded)).collect::<Result<_, _>>()?;
+    let s: Vec<Vec<f64>> =
+        args.outputs.iter().map(|n| col(&sim, n, &args.simulated)).collect::<Result<_, _>>()?;
+    let sig = |names: &[String], v: &[Vec<f64>]| -> Vec<(String, Vec<f64>)> {
+        names.iter().cloned().zip(v.iter().cloned()).collect()
+    };
+    let (us, ds, ys, ss) =
+        (sig(&args.inputs, &u), sig(&args.excitations, &d), sig(&args.outputs, &y), sig(&args.outputs, &s));
+    fn view(v: &[(String, Vec<f64>)]) -> Vec<Signal<'_>> {
+        v.iter().map(|(n, x)| Signal { name: n.as_str(), values: x.as_slice() }).collect()
+    }
+    let input = DiagnoseInput {
+        time: rec.time(),
+        inputs: view(&us),
+        excitations: if ds.is_empty() { None } else { Some(view(&ds)) },
+        outputs: view(&ys),
+        simulated: view(&ss),
+        physical: Vec::new(),
+    };
+    let opts = DiagnoseOptions {
+        holdout_fraction: args.holdout_fraction,
+        surrogates: args.surrogates,
+        seed: args.seed,
+        lags: Lags::new(1, args.tmax)?,
+        scoring: args.scoring.into(),
+        ..DiagnoseOptions::default()
+    };
+    let dg = diagnose(&input, &opts)?;
+    write_outputs(
+        &dg,
+        rec.time(),
+        &args.outputs,
+        &y,
+        &s,
+        &args.report,
+        &args.corrected,
+        args.figures.as_deref(),
+    )?;
+    for f in &dg.report.findings {
+        println!("{} → {}: {} — {}", f.input, f.output, f.physics.name(), f.summary);
+    }
+    if dg.report.findings.is_empty() {
+        println!("no mismatch found (MI matrix all below its critical values)");
+    }
+    for (k, v) in &dg.report.holdout.fit_before_pct {
+        println!("held-out FIT {k}: {v:.1} % → {:.1} %", dg.report.holdout.fit_after_pct[k]);
+    }
+    Ok(())
+}
+
+/// Writes the JSON report, the corrected CSV and (optionally) one figure per output.
+#[allow(clippy::too_many_arguments)]
+pub fn write_outputs(
+    dg: &Diagnosis,
+    time: &[f64],
+    names: &[String],
+    y: &[Vec<f64>],
+    s: &[Vec<f64>],
+    report: &Path,
+    corrected: &Path,
+    figures: Option<&Path>,
+) -> anyhow::Result<()> {
+    std::fs::write(report, serde_json::to_string_pretty(&dg.report)?)
+        .with_context(|| format!("writing {}", report.display()))?;
+    let mut t = Table::new(time.to_vec());
+    for (n, c) in names.iter().zip(&dg.corrected) {
+        t.push_column(n.clone(), c.clone())?;
+    }
+    let f = std::fs::File::create(corrected).with_context(|| format!("writing {}", corrected.display()))?;
+    t.write_csv(std::io::BufWriter::new(f))?;
+    if let Some(dir) = figures {
+        for (j, n) in names.iter().enumerate() {
+            output_figure(
+                dir,
+                &format!("diagnose_{n}"),
+                &format!("{n}: recorded, simulated, corrected"),
+                time,
+                &y[j],
+                &s[j],
+                &dg.corrected[j],
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// A figure of recorded, simulated and corrected output (at most 300 points, the held-out tail
+/// last).
+pub fn output_figure(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    time: &[f64],
+    y: &[f64],
+    s: &[f64],
+    c: &[f64],
+) -> anyhow::Result<()> {
+    let n = time.len();
+    let step = n.div_ceil(300).max(1);
+    let pts = |v: &[f64]| -> Vec<(f64, f64)> { (0..n).step_by(step).map(|k| (time[k], v[k])).collect() };
+    let series = [
+        XySeries { label: "recorded".into(), points: pts(y), error: None },
+        XySeries { label: "simulated".into(), points: pts(s), error: None },
+        XySeries { label: "corrected".into(), points: pts(c), error: None },
+    ];
+    write_xy_chart(dir, name, title, "time [s]", "output", &series)?;
+    Ok(())
+}

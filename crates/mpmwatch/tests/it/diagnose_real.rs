@@ -1,0 +1,112 @@
+//! A real recording: the Silverbox (an electronic Duffing oscillator, `m ÿ + d ẏ + k1 y + k3 y³ =
+//! u`) against a linear ARX(2,3) simulation fitted on the low-amplitude start of its arrow-head
+//! record. `diagnose` must name the cubic stiffness and raise the held-out FIT by at least 5
+//! points, the issue's target for real recordings.
+//!
+//! The data are not in the repository. They are read from `$MPMWATCH_DATA/silverbox/SNLS80mV.csv`
+//! or, without that variable, from `../shared/data` next to the crate. When the file is absent
+//! the test says so on stderr and returns: it cannot check anything then, and it does not claim
+//! to (the message starts with `SKIPPED`).
+
+use std::path::PathBuf;
+
+use mpmwatch_core::detect::Signal;
+use mpmwatch_core::model::{Arx, ArxOrders};
+use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose};
+
+fn data_dir() -> PathBuf {
+    std::env::var_os("MPMWATCH_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
+}
+
+fn read_columns(path: &PathBuf, names: &[&str]) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> =
+        lines.next().unwrap().split(',').map(|s| s.trim().trim_matches('"').to_string()).collect();
+    let idx: Vec<usize> =
+        names.iter().map(|n| header.iter().position(|h| h == n).expect("column in header")).collect();
+    let mut cols = vec![Vec::new(); names.len()];
+    for l in lines.filter(|l| !l.trim().is_empty()) {
+        let cells: Vec<&str> = l.split(',').collect();
+        for (c, &k) in idx.iter().enumerate() {
+            cols[c].push(cells[k].trim().parse::<f64>().unwrap());
+        }
+    }
+    cols
+}
+
+#[test]
+fn silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises() {
+    let path = data_dir().join("silverbox/SNLS80mV.csv");
+    if !path.exists() {
+        eprintln!(
+            "SKIPPED silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises: {} not found \
+             (set MPMWATCH_DATA to the shared data folder); nothing was checked",
+            path.display()
+        );
+        return;
+    }
+    let cols = read_columns(&path, &["V1", "V2"]);
+    let (u, y) = (&cols[0][..40_000], &cols[1][..40_000]);
+    // ARX(2,3) with a constant, least squares on samples 2 000..10 000 (the low amplitudes).
+    let orders = ArxOrders { na: 2, nb: 3, delays: vec![0] };
+    let s = Arx::fit(y, &[u], &orders, 2_002..10_000).unwrap().simulate_from(&[u], y[0]).unwrap();
+    // Diagnosed on the last 10 000 samples of the arrow (the largest amplitudes).
+    let w = 30_000..40_000;
+    let time: Vec<f64> = (0..w.len()).map(|k| k as f64 / 610.35).collect();
+    let input = DiagnoseInput {
+        time: &time,
+        inputs: vec![Signal { name: "u", values: &u[w.clone()] }],
+        excitations: None,
+        outputs: vec![Signal { name: "y", values: &y[w.clone()] }],
+        simulated: vec![Signal { name: "y", values: &s[w] }],
+        physical: Vec::new(),
+    };
+    let d = diagnose(&input, &DiagnoseOptions::default()).unwrap();
+    let f = d.report.findings.first().expect("a finding on the Silverbox");
+    assert_eq!(f.physics, Physics::Cubic, "{}", f.summary);
+    let (before, after) = (d.report.holdout.fit_before_pct["y"], d.report.holdout.fit_after_pct["y"]);
+    assert!(after - before >= 5.0, "held-out FIT {before:.1} → {after:.1}");
+}
+
+/// The cascaded tanks against the Torricelli two-tank model without overflow, calibrated on the
+/// estimation record's overflow-free runs, the model itself handed to `diagnose` (state limits,
+/// `diagnose::physical`): the upper tank's overflow must be named (a saturation of state 0) and
+/// the held-out FIT (the validation record but its first 102 samples) must rise by ≥ 5 points.
+#[test]
+fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
+    use mpmwatch::tanks::{benchmark_options, benchmark_record};
+    use mpmwatch_diagnose::PhysicalModel;
+    let path = data_dir().join("cascaded_tanks/dataBenchmark.csv");
+    if !path.exists() {
+        eprintln!(
+            "SKIPPED cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises: {} not \
+             found (set MPMWATCH_DATA to the shared data folder); nothing was checked",
+            path.display()
+        );
+        return;
+    }
+    let cols = read_columns(&path, &["uEst", "uVal", "yEst", "yVal"]);
+    let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
+    let record = benchmark_record(ue, ye, uv, yv);
+    let s = record.simulate();
+    let u: Vec<f64> = ue.iter().chain(uv).copied().collect();
+    let y: Vec<f64> = ye.iter().chain(yv).copied().collect();
+    let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();
+    let input = DiagnoseInput {
+        time: &time,
+        inputs: vec![Signal { name: "u", values: &u }],
+        excitations: None,
+        outputs: vec![Signal { name: "y", values: &y }],
+        simulated: vec![Signal { name: "y", values: &s }],
+        physical: vec![Some(&record)],
+    };
+    let d = diagnose(&input, &benchmark_options(&DiagnoseOptions::default())).unwrap();
+    let f = d.report.findings.first().expect("a finding on the cascaded tanks");
+    assert_eq!(f.physics, Physics::Saturation, "{}", f.summary);
+    assert_eq!(f.parameters.get("state_index"), Some(&0.0), "{}", f.summary);
+    let (before, after) = (d.report.holdout.fit_before_pct["y"], d.report.holdout.fit_after_pct["y"]);
+    assert!(after - before >= 5.0, "held-out FIT {before:.1} → {after:.1}");
+}

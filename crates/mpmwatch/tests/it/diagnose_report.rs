@@ -1,0 +1,166 @@
+//! The `diagnose` contract: the report JSON has the shape of DESIGN.md §4.5, bad input gives an
+//! error naming the offending column or file, and a disturbance-only change yields no finding.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use mpmwatch_core::detect::Signal;
+use mpmwatch_diagnose::{DiagnoseError, DiagnoseInput, DiagnoseOptions, diagnose, diagnose_numbered};
+use mpmwatch_sim::Excitation;
+use mpmwatch_sim::scenarios::{Effect, ScenarioSpec, run};
+
+fn spec(effect: Effect, excitation: Excitation, seed: u64) -> ScenarioSpec {
+    ScenarioSpec {
+        name: "t".into(),
+        effect,
+        size: 1,
+        channel: (0, 0),
+        excitation,
+        n: 2000,
+        seed,
+        target_ratio: 0.6,
+    }
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mpmwatch_diag_{}_{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write_csv(path: &PathBuf, names: &[&str], cols: &[&[f64]]) {
+    let mut s = String::from("time");
+    for n in names {
+        s.push(',');
+        s.push_str(n);
+    }
+    s.push('\n');
+    for k in 0..cols[0].len() {
+        s.push_str(&k.to_string());
+        for c in cols {
+            s.push_str(&format!(",{}", c[k]));
+        }
+        s.push('\n');
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn disturbance_only_change_yields_no_finding() {
+    for seed in [3, 4] {
+        let rec = run(&spec(Effect::DisturbanceOnly, Excitation::Prbs, seed)).unwrap();
+        let d = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &DiagnoseOptions::default()).unwrap();
+        assert!(d.report.findings.is_empty(), "seed {seed}: {:?}", d.report.findings);
+        assert!(!d.report.mismatch, "seed {seed}");
+        assert_eq!(d.corrected[0], rec.s[0], "no finding must leave the simulation as it is");
+    }
+}
+
+#[test]
+fn report_json_matches_design_4_5() {
+    let rec = run(&spec(Effect::DeadTime, Excitation::Prbs, 7)).unwrap();
+    let dir = tmp("json");
+    let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
+    write_csv(&recp, &["u1", "d1", "y1"], &[&rec.u[0], &rec.d[0], &rec.y[0]]);
+    write_csv(&simp, &["y1"], &[&rec.s[0]]);
+    let (rep, cor) = (dir.join("r.json"), dir.join("c.csv"));
+    let out = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
+        .args(["diagnose", "--recorded"])
+        .arg(&recp)
+        .arg("--simulated")
+        .arg(&simp)
+        .args(["--inputs", "u1", "--excitations", "d1", "--outputs", "y1", "--report"])
+        .arg(&rep)
+        .arg("--corrected")
+        .arg(&cor)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
+    assert_eq!(v["mismatch"], true);
+    let ch = &v["channels"][0];
+    for k in ["input", "output", "norm_mi_bits", "threshold_bits", "significant", "verdict"] {
+        assert!(!ch[k].is_null(), "channels[0].{k} missing: {ch}");
+    }
+    assert!(["mismatch", "clean", "implicated_by_feedback"].contains(&ch["verdict"].as_str().unwrap()));
+    let f = &v["findings"][0];
+    for k in
+        ["input", "output", "physics", "acts_on", "summary", "parameters", "fit_before_pct", "fit_after_pct"]
+    {
+        assert!(!f[k].is_null(), "findings[0].{k} missing: {f}");
+    }
+    let vocab = [
+        "gain",
+        "time_constant",
+        "dead_time",
+        "missing_coupling",
+        "dead_zone",
+        "saturation",
+        "quadratic",
+        "cubic",
+        "bilinear",
+        "backlash",
+        "coulomb_friction",
+        "abs_sensor",
+        "unexplained",
+    ];
+    assert!(vocab.contains(&f["physics"].as_str().unwrap()), "{f}");
+    assert!(["input", "output"].contains(&f["acts_on"].as_str().unwrap()));
+    assert!(f["parameters"].as_object().unwrap().values().all(|p| p.is_f64()));
+    let h = &v["holdout"];
+    assert_eq!(h["start_index"], 1400);
+    assert!(h["fit_before_pct"]["y1"].is_f64() && h["fit_after_pct"]["y1"].is_f64());
+    let corrected = std::fs::read_to_string(&cor).unwrap();
+    assert!(corrected.starts_with("time,y1\n"), "{}", &corrected[..20]);
+    assert_eq!(corrected.lines().count(), 2001);
+}
+
+#[test]
+fn bad_input_names_the_culprit() {
+    let dir = tmp("bad");
+    let x: Vec<f64> = (0..400).map(|k| (k as f64 * 0.3).sin()).collect();
+    let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
+    write_csv(&recp, &["u1", "y1"], &[&x, &x]);
+    write_csv(&simp, &["y1"], &[&x[..399]]);
+    let cli = |inputs: &str, outputs: &str, sim: &PathBuf| {
+        let out = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
+            .args(["diagnose", "--recorded"])
+            .arg(&recp)
+            .arg("--simulated")
+            .arg(sim)
+            .args(["--inputs", inputs, "--outputs", outputs, "--report"])
+            .arg(dir.join("r.json"))
+            .arg("--corrected")
+            .arg(dir.join("c.csv"))
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let e = cli("u1", "y1", &simp);
+    assert!(e.contains("time axes do not match") && e.contains("sim.csv"), "{e}");
+    let good = dir.join("sim2.csv");
+    write_csv(&good, &["y1"], &[&x]);
+    let e = cli("u7", "y1", &good);
+    assert!(e.contains("u7") && e.contains("u1"), "{e}");
+    let mut nan = x.clone();
+    nan[17] = f64::NAN;
+    let nanp = dir.join("sim3.csv");
+    write_csv(&nanp, &["y1"], &[&nan]);
+    let e = cli("u1", "y1", &nanp);
+    assert!(e.contains("y1") && e.contains("NaN") && e.contains("sim3.csv"), "{e}");
+    // The library names the series too.
+    let t: Vec<f64> = (0..400).map(|k| k as f64).collect();
+    let input = DiagnoseInput {
+        time: &t,
+        inputs: vec![Signal { name: "u1", values: &x }],
+        excitations: None,
+        outputs: vec![Signal { name: "y1", values: &x }],
+        simulated: vec![Signal { name: "y1", values: &nan }],
+        physical: Vec::new(),
+    };
+    match diagnose(&input, &DiagnoseOptions::default()) {
+        Err(DiagnoseError::NotFinite { name, index, .. }) => assert_eq!((name.as_str(), index), ("y1", 17)),
+        other => panic!("{other:?}"),
+    }
+}
