@@ -3,7 +3,7 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use mpmwatch_service::config::Config;
-use mpmwatch_service::controller::Controller;
+use mpmwatch_service::Controller;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };

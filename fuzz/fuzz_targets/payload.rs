@@ -3,7 +3,7 @@
 //! controller fed the bytes counts every sample as accepted or dropped.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use mpmwatch_service::controller::Controller;
+use mpmwatch_service::Controller;
 use mpmwatch_service::payload::{self, MAX_BATCH, Role};
 
 const CONFIG: &str = r#"

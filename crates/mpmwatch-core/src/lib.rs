@@ -15,6 +15,8 @@
 //! * [`io`]: the time-aligned data table and its CSV form.
 //! * [`numerics`]: least squares, instrumental variables, projections and order statistics.
 
+#![warn(missing_docs)]
+
 pub mod detect;
 pub mod info;
 pub mod io;

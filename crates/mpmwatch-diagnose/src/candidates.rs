@@ -413,6 +413,12 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     out
 }
 
+/// `B(q⁻¹)/(1 − pole·q⁻¹)` applied to `x`, started in steady state (the grids' poles are in
+/// [0, 1), so the filter exists; a non-finite coefficient gives a zero column that no fit uses).
+fn first_order(b: Vec<f64>, pole: f64, x: &[f64]) -> Vec<f64> {
+    DiscreteTf::new(b, vec![1.0, -pole], 0).map_or_else(|_| vec![0.0; x.len()], |g| g.simulate_from_rest(x))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -424,8 +430,3 @@ mod tests {
     }
 }
 
-/// `B(q⁻¹)/(1 − pole·q⁻¹)` applied to `x`, started in steady state (the grids' poles are in
-/// [0, 1), so the filter exists; a non-finite coefficient gives a zero column that no fit uses).
-fn first_order(b: Vec<f64>, pole: f64, x: &[f64]) -> Vec<f64> {
-    DiscreteTf::new(b, vec![1.0, -pole], 0).map_or_else(|_| vec![0.0; x.len()], |g| g.simulate_from_rest(x))
-}

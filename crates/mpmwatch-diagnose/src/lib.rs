@@ -24,24 +24,27 @@
 //! hypotheses too, each the model re-run with it; the limits have their own locating test, and
 //! all compete in step 4 ([`physical`]).
 
-pub mod candidates;
-pub mod describe;
+#![warn(missing_docs)]
+
+mod candidates;
+mod describe;
 mod error;
-pub mod fitness;
-pub mod frols;
-pub mod locate;
-pub mod nominal;
-pub mod physical;
-pub mod report;
-pub mod select;
-pub mod simulate;
+mod fitness;
+mod frols;
+mod locate;
+mod nominal;
+mod physical;
+mod report;
+mod select;
+mod simulate;
 
 use std::collections::BTreeMap;
 
 pub use candidates::{ActsOn, Physics};
 pub use error::DiagnoseError;
 pub use fitness::fit_pct;
-pub use physical::PhysicalModel;
+pub use nominal::{NominalArx, identify as identify_nominal};
+pub use physical::{LEVEL_QUANTILES, PhysicalModel};
 pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
 
 use candidates::OutputCtx;
@@ -476,7 +479,7 @@ fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {
 }
 
 /// The context of one output: centred inputs, the identified nominal model and its channels.
-pub fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCtx {
+pub(crate) fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCtx {
     let model = nominal::identify(u, s, split.train.clone());
     let u0: Vec<f64> = u.iter().map(|x| median(&x[split.train.clone()])).collect();
     let ut: Vec<Vec<f64>> = u.iter().zip(&u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
@@ -499,7 +502,7 @@ pub fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCt
 /// The dither-driven part of an input: its least-squares projection on the excitations at lags
 /// 0..=30 (and a constant) over the training rows. The excitations are independent of the
 /// disturbance, so this part is too; it is what the instruments are built from.
-pub fn dither_driven(u: &[f64], exc: &[&[f64]], rows: std::ops::Range<usize>) -> Vec<f64> {
+pub(crate) fn dither_driven(u: &[f64], exc: &[&[f64]], rows: std::ops::Range<usize>) -> Vec<f64> {
     let ones = vec![1.0; u.len()];
     let mut cols: Vec<Vec<f64>> = Vec::new();
     for e in exc {
@@ -518,7 +521,7 @@ pub fn dither_driven(u: &[f64], exc: &[&[f64]], rows: std::ops::Range<usize>) ->
 /// Features of the dither history on which closed-loop scores are projected: a constant, each
 /// dither at lags 0..=20, its square at lags 0..=4 (non-binary dithers), and products of its
 /// lags 0..=4 (what an even nonlinearity makes of a binary dither).
-pub fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
+pub(crate) fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
     let n = exc.first().map_or(0, |e| e.len());
     let mut z = vec![vec![1.0; n]];
     for e in exc {
@@ -539,7 +542,7 @@ pub fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
 
 /// The closed-loop scoring contexts: inputs = dither-driven part + the disturbance-driven part
 /// (`u − u_d`) circularly shifted by 1/5, 2/5, 3/5 and 4/5 of the record.
-pub fn scoring_ctxs(ctx: &OutputCtx, u: &[&[f64]], u_driven: &[Vec<f64>]) -> Vec<OutputCtx> {
+pub(crate) fn scoring_ctxs(ctx: &OutputCtx, u: &[&[f64]], u_driven: &[Vec<f64>]) -> Vec<OutputCtx> {
     let n = u.first().map_or(0, |x| x.len());
     (1..=4)
         .map(|k| {
@@ -556,7 +559,7 @@ pub fn scoring_ctxs(ctx: &OutputCtx, u: &[&[f64]], u_driven: &[Vec<f64>]) -> Vec
 
 /// The instrument context: `ctx` with the dither-driven inputs in place of the recorded ones,
 /// and the model's response to them in place of the simulated and recorded outputs.
-pub fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
+pub(crate) fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
     let ut: Vec<Vec<f64>> =
         u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
     let s_channel: Vec<Vec<f64>> = (0..ut.len()).map(|i| ctx.model.channel(i, &ut[i])).collect();

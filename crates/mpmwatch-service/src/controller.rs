@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::sync::Arc;
 
-use super::alarm::{AlarmEvent, Debounce, Transition};
+use super::alarm::{AlarmEvent, Debounce};
 use super::align::{Aligner, ClosedRow, DropReason, Jump, Layout, Residuals, WindowRow};
 use super::analysis::{RunReport, RunStatus};
 use super::config::{ControllerConfig, ResidualSource};
@@ -303,11 +303,6 @@ impl Controller {
     pub fn pending(&self) -> usize {
         self.aligner.pending()
     }
-}
-
-/// Whether an event raised (for counting).
-pub fn is_raise(e: &AlarmEvent) -> bool {
-    e.event == Transition::Raise
 }
 
 #[cfg(test)]

@@ -73,11 +73,6 @@ impl Guard {
     pub fn max_body(&self) -> usize {
         self.max_body
     }
-
-    /// Whether non-GET endpoints are usable (a token is configured).
-    pub fn has_token(&self) -> bool {
-        self.token.is_some()
-    }
 }
 
 /// Equality whose time does not depend on where the inputs differ (it does depend on their

@@ -12,25 +12,31 @@
 //! * [`metrics`], [`http`], [`page`]: Prometheus text, the HTTP API (DESIGN.md §4.4), the status page.
 //! * [`guard`]: the HTTP API's bearer token, body size and rate limits.
 //! * [`ingest`], [`scheduler`]: the async tasks (zenoh subscription, queryable, periodic runs).
-//! * [`demo`]: the simulated plant of `mpmwatch demo`.
-//! * [`loadgen`]: synthetic controllers publishing over zenoh (`mpmwatch loadgen`).
+//!
+//! The demo plant and the load generator live in the binary crate.
 //!
 //! Only the last group and [`Service::start`] touch tokio and zenoh.
 
-pub mod alarm;
-pub mod align;
-pub mod analysis;
+#![warn(missing_docs)]
+
+mod alarm;
+mod align;
+mod analysis;
 pub mod config;
-pub mod controller;
-pub mod guard;
-pub mod http;
-pub mod ingest;
-pub mod metrics;
-pub mod page;
+mod controller;
+mod guard;
+mod http;
+mod ingest;
+mod metrics;
+mod page;
 pub mod payload;
-pub mod scheduler;
-pub mod store;
-pub mod window;
+mod scheduler;
+mod store;
+mod window;
+
+pub use analysis::RunStatus;
+pub use controller::Controller;
+pub use scheduler::run_once;
 
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
@@ -41,7 +47,6 @@ use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
 use self::config::{Config, ZenohConfig};
-use self::controller::Controller;
 use self::metrics::Metrics;
 use self::store::{Store, StoreHealth};
 

@@ -2,6 +2,8 @@
 //! scenarios behind `mpmwatch simulate`. Pure and seeded: every random draw comes from a
 //! `ChaCha8Rng` built from the caller's seed, so one seed always gives the same record.
 
+#![warn(missing_docs)]
+
 pub mod cases;
 mod closed_loop;
 mod dither;

@@ -6,6 +6,8 @@
 //! The numerics live in `mpmwatch-core`, the plants in `mpmwatch-sim`, the diagnosis in
 //! `mpmwatch-diagnose` and the online monitor in `mpmwatch-service`.
 
+#![warn(missing_docs)]
+
 pub mod benchmark;
 pub mod demo;
 pub mod loadgen;

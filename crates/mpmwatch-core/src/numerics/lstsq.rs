@@ -150,7 +150,7 @@ mod tests {
     fn r_squared_of_an_affine_map_is_one_and_of_a_constant_zero() {
         let x: Vec<f64> = (0..100).map(|t| (t as f64 * 0.37).sin()).collect();
         let y: Vec<f64> = x.iter().map(|v| 3.0 - 2.0 * v).collect();
-        assert!((r_squared(&y, &[x.clone()]) - 1.0).abs() < 1e-12);
+        assert!((r_squared(&y, std::slice::from_ref(&x)) - 1.0).abs() < 1e-12);
         assert_eq!(r_squared(&[4.0; 100], &[x]), 0.0);
     }
 

@@ -8,7 +8,7 @@ use crate::service_support;
 use std::time::Duration;
 
 use crate::fault_support::*;
-use mpmwatch_service::{Service, scheduler};
+use mpmwatch_service::{Service, run_once};
 use service_support::*;
 
 async fn status(http: u16) -> serde_json::Value {
@@ -164,7 +164,7 @@ async fn jumps_of_the_source_clock_are_counted_and_survived() {
         (count(&status(http).await, "window_contiguous") >= 200).then_some(())
     })
     .await;
-    let r = scheduler::run_once(&service.shared, "c1").await.expect("a run");
+    let r = run_once(&service.shared, "c1").await.expect("a run");
     assert_eq!(r.status.as_str(), "ok", "{:?}", r.message);
     let _ = p.close().await;
     service.stop().await;
@@ -209,7 +209,7 @@ async fn a_full_store_degrades_health_and_analysis_goes_on() {
 
     // Ingestion and analysis go on without persistence.
     until("250 rows", || async { (count(&status(http).await, "window_len") == 250).then_some(()) }).await;
-    let r = scheduler::run_once(&service.shared, "c1").await.expect("a run");
+    let r = run_once(&service.shared, "c1").await.expect("a run");
     assert_eq!(r.status.as_str(), "ok", "{:?}", r.message);
 
     // Space comes back: the rows kept for retry are written and health recovers.

@@ -3,7 +3,7 @@
 //! states before and after a run are deterministic.
 
 use crate::service_support::*;
-use mpmwatch_service::{Service, scheduler};
+use mpmwatch_service::{Service, run_once};
 
 const ZENOH: u16 = 17455;
 const HTTP: u16 = 19455;
@@ -44,7 +44,7 @@ async fn http_api_bodies_and_error_codes() {
     }
 
     // An analysis with too little data reports insufficient_data and is not analysed.
-    let r = scheduler::run_once(&service.shared, "c1").await.unwrap();
+    let r = run_once(&service.shared, "c1").await.unwrap();
     assert_eq!(r.status.as_str(), "insufficient_data");
     let (code, v) = get_json(HTTP, "/api/v1/controllers/c1/matrix").await;
     assert_eq!((code, v["status"].as_str()), (200, Some("insufficient_data")), "{v}");
@@ -62,7 +62,7 @@ async fn http_api_bodies_and_error_codes() {
         (v["window_len"].as_u64() == Some(300)).then_some(())
     })
     .await;
-    let r = scheduler::run_once(&service.shared, "c1").await.unwrap();
+    let r = run_once(&service.shared, "c1").await.unwrap();
     assert_eq!(r.status.as_str(), "ok", "{:?}", r.message);
 
     let (code, m) = get_json(HTTP, "/api/v1/controllers/c1/matrix").await;

@@ -203,76 +203,8 @@ fn tanks_overflow_physics() {
         eprintln!("upper level {level:>4}: {}", row.join("  "));
     }
     let train = 0..split;
-    let arx = mpmwatch_diagnose::nominal::identify(&[u.as_slice()], &nominal, train);
+    let arx = mpmwatch_diagnose::identify_nominal(&[u.as_slice()], &nominal, train);
     eprintln!("linear nominal identified from the simulation: FIT {:.1} % against it", arx.fit_pct);
-}
-
-/// Output-side hypotheses on one case, by context (CASE=name).
-#[test]
-#[ignore]
-fn output_side_debug() {
-    use mpmwatch_diagnose::candidates::Term;
-    use mpmwatch_diagnose::simulate::{FittedTerm, correction};
-    use mpmwatch_diagnose::{dither_driven, instrument_ctx, output_ctx, scoring_ctxs, select::Split};
-    let only = std::env::var("CASE").unwrap_or_else(|_| "c23".into());
-    for spec in casebook_specs(3000, 100) {
-        if !spec.name.contains(only.as_str()) {
-            continue;
-        }
-        let rec = run(&spec).unwrap();
-        let n = 3000;
-        let n_train = 2100;
-        let split = Split {
-            features: None,
-            fit: 20..1500,
-            validate: 1500..n_train,
-            train: 20..n_train,
-            folds: vec![],
-        };
-        let u: Vec<&[f64]> = rec.u.iter().map(|v| v.as_slice()).collect();
-        let e: Vec<&[f64]> = rec.d.iter().map(|v| v.as_slice()).collect();
-        let j = spec.channel.1;
-        let ctx = output_ctx(&u, &rec.y[j], &rec.s[j], &split);
-        let ud: Vec<Vec<f64>> = u.iter().map(|x| dither_driven(x, &e, 20..n_train)).collect();
-        let inst = instrument_ctx(&ctx, &ud);
-        let sc = scoring_ctxs(&ctx, &u, &ud);
-        let r: Vec<f64> = rec.y[j].iter().zip(&rec.s[j]).map(|(a, b)| a - b).collect();
-        let stats = |x: &[f64]| {
-            let m = x.iter().sum::<f64>() / x.len() as f64;
-            let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len() as f64).sqrt();
-            let neg = x.iter().filter(|v| **v < 0.0).count() as f64 / x.len() as f64;
-            format!("mean {m:.3} sd {sd:.3} neg {neg:.3}")
-        };
-        eprintln!("y0 {:.3} u0 {:?}", ctx.y0, ctx.u0);
-        eprintln!("s     {}", stats(&ctx.s[20..n_train]));
-        eprintln!("inst  {}", stats(&inst.s[20..n_train]));
-        for (k, c) in sc.iter().enumerate() {
-            eprintln!("sc{k}   {}", stats(&c.s[20..n_train]));
-        }
-        let val = 1500..n_train;
-        for term in [Term::AbsSensor(0.0), Term::SaturationOut { lo: 0.068, hi: f64::INFINITY }] {
-            let f =
-                FittedTerm { input: spec.channel.0, term: term.clone(), intercept: 0.0, coefs: vec![1.0] };
-            let sse = |c: &[f64]| {
-                let m = (20..1500).map(|t| r[t] - c[t]).sum::<f64>() / 1480.0;
-                val.clone().map(|t| (r[t] - c[t] - m).powi(2)).sum::<f64>()
-            };
-            let c_rec = correction(&ctx, &f).unwrap();
-            let mut c_avg = vec![0.0; n];
-            for s in &sc {
-                let c = correction(s, &f).unwrap();
-                c_avg.iter_mut().zip(&c).for_each(|(a, b)| *a += b / sc.len() as f64);
-            }
-            let c_inst = correction(&inst, &f).unwrap();
-            eprintln!(
-                "{term:?}: SSE null {:.3} recorded {:.3} scoring {:.3} inst {:.3}",
-                sse(&vec![0.0; n]),
-                sse(&c_rec),
-                sse(&c_avg),
-                sse(&c_inst)
-            );
-        }
-    }
 }
 
 /// The cascaded tanks diagnosed with the Torricelli model over surrogate seeds 1..=SEEDS

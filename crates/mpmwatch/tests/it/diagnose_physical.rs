@@ -11,7 +11,7 @@
 use mpmwatch::tanks::{Overflow, TanksRecord, TwoTanks};
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::quantile;
-use mpmwatch_diagnose::physical::LEVEL_QUANTILES;
+use mpmwatch_diagnose::LEVEL_QUANTILES;
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, PhysicalModel, Physics, diagnose};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
