@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use mpmwatch::demo::DemoPlant;
-use mpmwatch_service::Service;
 use mpmwatch_service::RunStatus;
+use mpmwatch_service::Service;
 use mpmwatch_service::config::Config;
 use mpmwatch_service::payload;
 
