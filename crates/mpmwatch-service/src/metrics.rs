@@ -1,5 +1,5 @@
 //! Prometheus metrics (text format through `prometheus-client`). The names are the contract of
-//! `deploy/grafana-dashboard.json`; docs/deploy.md lists them.
+//! `deploy/grafana/dashboards/mpmwatch.json`; docs/deploy.md lists them.
 
 use std::sync::atomic::AtomicU64;
 
@@ -269,5 +269,105 @@ impl Metrics {
         // Writing to a String cannot fail.
         let _ = prometheus_client::encoding::text::encode(&mut s, &self.registry);
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    use super::Metrics;
+
+    /// Every name the exposition can carry: each family's name from its `# TYPE` line (present
+    /// even before a run has created its per-channel series) and a counter's `_total` sample.
+    fn exported() -> BTreeSet<String> {
+        let m = Metrics::new();
+        m.init("c1");
+        let mut names = BTreeSet::new();
+        for line in m.encode().lines() {
+            if let Some(rest) = line.strip_prefix("# TYPE ") {
+                let mut parts = rest.split_whitespace();
+                let (Some(name), Some(kind)) = (parts.next(), parts.next()) else { continue };
+                names.insert(name.to_string());
+                if kind == "counter" {
+                    names.insert(format!("{name}_total"));
+                }
+            }
+        }
+        names
+    }
+
+    /// The `mpm_…` identifiers in a query or rule text.
+    fn referenced(text: &str) -> BTreeSet<String> {
+        let mut out = BTreeSet::new();
+        let mut rest = text;
+        while let Some(k) = rest.find("mpm_") {
+            let tail = &rest[k..];
+            let end = tail.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(tail.len());
+            out.insert(tail[..end].to_string());
+            rest = &tail[end..];
+        }
+        out
+    }
+
+    fn collect_exprs(v: &serde_json::Value, out: &mut Vec<String>) {
+        match v {
+            serde_json::Value::Object(map) => {
+                for (k, x) in map {
+                    match (k.as_str(), x) {
+                        ("expr" | "query", serde_json::Value::String(s)) => out.push(s.clone()),
+                        _ => collect_exprs(x, out),
+                    }
+                }
+            }
+            serde_json::Value::Array(a) => a.iter().for_each(|x| collect_exprs(x, out)),
+            _ => {}
+        }
+    }
+
+    #[test]
+    fn the_dashboard_and_the_alert_rules_query_only_exported_metrics() {
+        let dashboard: serde_json::Value =
+            serde_json::from_str(include_str!("../../../deploy/grafana/dashboards/mpmwatch.json")).unwrap();
+        let mut exprs = Vec::new();
+        collect_exprs(&dashboard, &mut exprs);
+        exprs.push(include_str!("../../../deploy/prometheus.yml").to_string());
+        let used: BTreeSet<String> = exprs.iter().flat_map(|e| referenced(e)).collect();
+        let exported = exported();
+        // A dashboard whose queries named no metric would pass the check below vacuously.
+        assert!(used.len() >= 8, "only {used:?} found in the dashboard's queries");
+        let unknown: Vec<&String> = used.iter().filter(|n| !exported.contains(*n)).collect();
+        assert!(unknown.is_empty(), "queried but not exported: {unknown:?}; exported: {exported:?}");
+    }
+
+    #[test]
+    fn the_dashboard_is_provisionable() {
+        let d: serde_json::Value =
+            serde_json::from_str(include_str!("../../../deploy/grafana/dashboards/mpmwatch.json")).unwrap();
+        assert_eq!(d["uid"], "mpmwatch");
+        let vars = d["templating"]["list"].as_array().unwrap();
+        let ds = vars.iter().find(|v| v["name"] == "datasource").expect("a datasource variable");
+        assert_eq!(ds["type"], "datasource");
+        assert_eq!(ds["query"], "prometheus");
+        // The variable defaults to the provisioned source's pinned uid.
+        let source = include_str!("../../../deploy/grafana/provisioning/datasources/prometheus.yml");
+        let uid = ds["current"]["value"].as_str().unwrap();
+        assert!(source.contains(&format!("uid: {uid}")), "{uid} is not the provisioned data source");
+        let provider = include_str!("../../../deploy/grafana/provisioning/dashboards/mpmwatch.yml");
+        assert!(provider.contains("type: file") && provider.contains("path: "));
+        // Every panel and query takes its source from the variable, none from a fixed uid.
+        let panels = d["panels"].as_array().unwrap();
+        assert!(!panels.is_empty());
+        for p in panels {
+            let title = &p["title"];
+            if p.get("targets").is_some() {
+                assert_eq!(p["datasource"]["uid"], "${datasource}", "panel {title}");
+                for t in p["targets"].as_array().unwrap() {
+                    if let Some(ds) = t.get("datasource") {
+                        assert_eq!(ds["uid"], "${datasource}", "a target of panel {title}");
+                    }
+                }
+            }
+        }
     }
 }
