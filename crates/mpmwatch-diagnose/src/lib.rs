@@ -275,9 +275,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     // Outputs whose residual is constant on the training part (a perfect simulation) cannot be
     // tested and need no correction.
     let testable: Vec<usize> = (0..residuals.len())
-        .filter(|&j| {
-            mpmwatch_core::info::validate::not_constant("residual", &residuals[j][..n_train]).is_ok()
-        })
+        .filter(|&j| mpmwatch_core::info::not_constant("residual", &residuals[j][..n_train]).is_ok())
         .collect();
     let matrix = if testable.is_empty() {
         None

@@ -36,7 +36,7 @@ use serde::Serialize;
 use super::nominal::NominalArx;
 use mpmwatch_core::detect::ArWhitener;
 use mpmwatch_core::info::Threshold;
-use mpmwatch_core::info::surrogate::{draw_shift, shift_bounds};
+use mpmwatch_core::info::{draw_shift, shift_bounds};
 use mpmwatch_core::numerics::{lagged as delayed, least_squares, r_squared};
 
 /// Lags of the dither in the features (the same window as the dither-driven projection).
@@ -180,7 +180,7 @@ pub fn projection_tests(
     let mut out = Vec::new();
     for j in 0..residuals.len() {
         for i in 0..exc.len() {
-            if mpmwatch_core::info::validate::not_constant("dither", exc[i]).is_err() {
+            if mpmwatch_core::info::not_constant("dither", exc[i]).is_err() {
                 continue;
             }
             let (r2, p) = stat(exc, i, j);

@@ -57,21 +57,17 @@ impl SortedMarginal {
         &self.sorted
     }
 
-    /// Number of samples `v` with `|v − c| < r`, the centre itself included when it is a sample.
-    ///
-    /// The distances are compared as `c − v` and `v − c`, the same floating-point expressions a
-    /// neighbour search computes, so a neighbour found at exactly distance `r` is excluded.
-    pub fn count_strictly_within(&self, c: f64, r: f64) -> usize {
-        count_strictly_within(&self.sorted, c, r)
-    }
-
     /// Number of samples `v` with `|v − c| ≤ r`.
     pub fn count_within(&self, c: f64, r: f64) -> usize {
         count_within(&self.sorted, c, r)
     }
 }
 
-/// [`SortedMarginal::count_strictly_within`] on a borrowed sorted slice.
+/// Number of samples `v` of the sorted slice with `|v − c| < r`, the centre itself included
+/// when it is a sample.
+///
+/// The distances are compared as `c − v` and `v − c`, the same floating-point expressions a
+/// neighbour search computes, so a neighbour found at exactly distance `r` is excluded.
 pub fn count_strictly_within(sorted: &[f64], c: f64, r: f64) -> usize {
     let lo = sorted.partition_point(|&v| c - v >= r);
     let hi = sorted.partition_point(|&v| v - c < r);
@@ -127,7 +123,11 @@ mod tests {
         let m = SortedMarginal::new(&v);
         for &c in &v {
             for r in [0.0, 0.25, 0.5, 1.0, 1.5, 10.0] {
-                assert_eq!(m.count_strictly_within(c, r), brute_count(&v, c, r, true), "c={c} r={r}");
+                assert_eq!(
+                    count_strictly_within(&m.sorted, c, r),
+                    brute_count(&v, c, r, true),
+                    "c={c} r={r}"
+                );
                 assert_eq!(m.count_within(c, r), brute_count(&v, c, r, false), "c={c} r={r}");
             }
         }

@@ -4,25 +4,29 @@
 //! Everything is computed in nats; [`Units`] converts to the paper's bits for output.
 //! Estimates are never clipped at zero, so surrogate statistics stay unbiased.
 
-pub mod correlation;
+pub(crate) mod correlation;
 mod digamma;
-pub mod discrete;
-pub mod entropy;
+pub(crate) mod discrete;
+pub(crate) mod entropy;
 mod error;
 mod estimator;
 mod ksg;
-pub mod lagged;
-pub mod marginal;
-pub mod normalized;
-pub mod significance;
-pub mod surrogate;
-pub mod validate;
+pub(crate) mod lagged;
+pub(crate) mod marginal;
+pub(crate) mod normalized;
+pub(crate) mod significance;
+pub(crate) mod surrogate;
+pub(crate) mod validate;
 
+pub use correlation::{Pearson, ccf, ccf_limit, family_wise_z, normal_quantile, pearson};
 pub use digamma::digamma;
+pub use entropy::kozachenko_leonenko;
 pub use error::InfoError;
 pub use estimator::{
     Estimator, MiEstimate, MiOptions, Units, XKind, mutual_information, mutual_information_multi,
 };
 pub use lagged::{LaggedPair, LaggedProfile, Lags, auto_tmax, lagged_profile};
+pub use normalized::{estevez, joe};
 pub use significance::{LaggedTest, SurrogateMethod, SurrogateOptions, Threshold, lagged_test};
-pub use surrogate::{Iaaft, IaaftOptions, IaaftReport};
+pub use surrogate::{Iaaft, IaaftOptions, IaaftReport, draw_shift, shift_bounds};
+pub use validate::not_constant;

@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use mpmwatch_core::info::significance::lagged_test;
+use mpmwatch_core::info::lagged_test;
 use mpmwatch_core::info::{Iaaft, IaaftOptions, Lags, MiOptions, SurrogateOptions};
 
 /// iAAFT keeps the exact value distribution and matches the (end-matched) Fourier amplitudes to

@@ -46,8 +46,9 @@ fn ca(dir: &Path, file: &str, cn: &str) -> Issuer<'static, KeyPair> {
 
 /// A deploy/tls example with its paths pointing into `dir` and its endpoints at `port`.
 fn example(name: &str, dir: &Path, port: u16, out: &str) -> PathBuf {
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("deploy/tls").join(name))
-        .expect("deploy example");
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../deploy/tls").join(name))
+            .expect("deploy example");
     let d = format!("{}/", dir.display());
     let text = text
         .replace("/etc/zenoh/tls/", &d)

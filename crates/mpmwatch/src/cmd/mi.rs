@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use mpmwatch_core::info::normalized::joe;
+use mpmwatch_core::info::joe;
 use mpmwatch_core::info::{Lags, MiOptions, SurrogateOptions, Units, XKind, lagged_test, mutual_information};
 use mpmwatch_core::io::Table;
 use serde_json::json;

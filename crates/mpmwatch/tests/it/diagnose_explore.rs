@@ -113,7 +113,7 @@ fn detail() {
 /// lines with fewer cells (a blank last line) are skipped so the columns stay aligned.
 fn read_tanks() -> Vec<Vec<f64>> {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/cascaded_tanks/dataBenchmark.csv");
+        .join("../../../shared/data/cascaded_tanks/dataBenchmark.csv");
     let text = std::fs::read_to_string(&p).unwrap();
     let mut cols = vec![Vec::new(); 4];
     for l in text.lines().skip(1).filter(|l| l.split(',').count() >= 4) {

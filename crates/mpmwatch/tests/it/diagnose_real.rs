@@ -17,7 +17,7 @@ use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose};
 fn data_dir() -> PathBuf {
     std::env::var_os("MPMWATCH_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
 }
 
 fn read_columns(path: &PathBuf, names: &[&str]) -> Vec<Vec<f64>> {

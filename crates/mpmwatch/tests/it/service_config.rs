@@ -55,7 +55,7 @@ surrogates = 1
 
 #[test]
 fn shipped_configs_pass_the_check() {
-    let root = env!("CARGO_MANIFEST_DIR");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
     for f in [
         "config/default.toml",
         "config/examples/continuous2x3.toml",
