@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::nominal::NominalArx;
 use mpmwatch_core::model::DiscreteTf;
-use mpmwatch_core::numerics::{lagged as delayed, quantile};
+use mpmwatch_core::numerics::{self, lagged as delayed, quantile};
 
 /// The fixed vocabulary of left-out physics (DESIGN.md §4.5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
@@ -379,7 +379,7 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     // move) and its median falls anywhere in the gap between them, so no quantile sits at the
     // operating point. (Casebook c09 is still named a gain with it: over two clusters a dead zone
     // and a gain reduction move the input alike, and the dead zone loses by its penalty.)
-    let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
+    let mean = numerics::mean(u);
     let centres: Vec<f64> =
         [0.3, 0.4, 0.5, 0.6, 0.7].iter().map(|&q| quantile(u, q)).chain(std::iter::once(mean)).collect();
     for &centre in &centres {

@@ -37,7 +37,7 @@ use super::nominal::NominalArx;
 use mpmwatch_core::detect::ArWhitener;
 use mpmwatch_core::info::Threshold;
 use mpmwatch_core::info::{draw_shift, shift_bounds};
-use mpmwatch_core::numerics::{lagged as delayed, least_squares, r_squared};
+use mpmwatch_core::numerics::{lagged as delayed, least_squares, minus_mean, r_squared};
 
 /// Lags of the dither in the features (the same window as the dither-driven projection).
 pub const LAGS: usize = 30;
@@ -130,11 +130,8 @@ impl DrivenMap {
 fn features(d: &[f64], ud: &[f64], model: &NominalArx, i: usize, has_channel: bool) -> Vec<Vec<f64>> {
     let mut z: Vec<Vec<f64>> = (0..=LAGS).map(|l| delayed(d, l)).collect();
     if has_channel {
-        let m = ud.iter().sum::<f64>() / ud.len().max(1) as f64;
-        let uc: Vec<f64> = ud.iter().map(|v| v - m).collect();
-        let s = model.channel(i, &uc);
-        let ms = s.iter().sum::<f64>() / s.len().max(1) as f64;
-        let sc: Vec<f64> = s.iter().map(|v| v - ms).collect();
+        let uc = minus_mean(ud);
+        let sc = minus_mean(&model.channel(i, &uc));
         let pow = |x: &[f64], p: i32| -> Vec<f64> { x.iter().map(|v| v.powi(p)).collect() };
         z.push(model.channel(i, &pow(&uc, 2)));
         z.push(model.channel(i, &pow(&uc, 3)));

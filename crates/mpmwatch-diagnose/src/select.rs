@@ -8,7 +8,7 @@
 use super::candidates::{ActsOn, OutputCtx, Term, grid};
 use super::frols::frols;
 use super::simulate::{FittedTerm, correction};
-use mpmwatch_core::numerics::{Projector, instrumental, lagged as delayed, least_squares_rows};
+use mpmwatch_core::numerics::{Projector, instrumental, lagged as delayed, least_squares_rows, minus_mean};
 
 /// How hypotheses are scored in a closed loop (open-loop records always use the plain
 /// validation error of the corrected residual).
@@ -353,10 +353,6 @@ pub fn rank(
 /// dither-driven centred input `ud` and response `sd`; and the square and cube of the whole
 /// dither-driven output (what an output-side map makes of the dither).
 pub fn nonlinear_dither_features(ctx: &OutputCtx, inst: &OutputCtx) -> Vec<Vec<f64>> {
-    let centred = |x: &[f64]| {
-        let m = x.iter().sum::<f64>() / x.len().max(1) as f64;
-        x.iter().map(|v| v - m).collect::<Vec<f64>>()
-    };
     let pow = |x: &[f64], p: i32| x.iter().map(|v| v.powi(p)).collect::<Vec<f64>>();
     let mut z = Vec::new();
     for i in 0..inst.ut.len() {
@@ -364,14 +360,14 @@ pub fn nonlinear_dither_features(ctx: &OutputCtx, inst: &OutputCtx) -> Vec<Vec<f
             continue;
         }
         let ud = &inst.ut[i];
-        let sd = centred(&inst.s_channel[i]);
+        let sd = minus_mean(&inst.s_channel[i]);
         z.push(ctx.model.channel(i, &pow(ud, 2)));
         z.push(ctx.model.channel(i, &pow(ud, 3)));
         z.push(pow(&sd, 2));
         z.push(pow(&sd, 3));
         z.push(ctx.model.channel(i, &pow(&sd, 3)));
     }
-    let s = centred(&inst.s);
+    let s = minus_mean(&inst.s);
     z.push(pow(&s, 2));
     z.push(pow(&s, 3));
     z
