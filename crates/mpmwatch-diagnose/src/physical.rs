@@ -63,7 +63,7 @@ pub const GAIN_RATIOS: [f64; 12] = [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.05, 1.1, 1.
 /// (`scaled − nominal`, `nominal` the model's simulation) over the whole record. A gain is the one input-side class stated through
 /// the model as well: under a strongly nonlinear model (a tank's level grows with the square of
 /// its inflow) a gain error is not a gain of the linear nominal, and the generic classes name it
-/// something else (measured: a dead zone for a 20 % weaker pump, `tests/diagnose_physical.rs`).
+/// something else (measured: a dead zone for a 20 % weaker pump, `crates/mpmwatch/tests/it/diagnose_physical.rs`).
 pub fn gain_terms(model: &dyn PhysicalModel, nominal: &[f64]) -> Vec<(Term, Vec<f64>)> {
     let mut out = Vec::new();
     for input in 0..model.inputs() {

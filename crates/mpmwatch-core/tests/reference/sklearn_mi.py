@@ -1,6 +1,6 @@
-"""Reference numbers for tests/sklearn_reference.rs, from scikit-learn's own KSG estimators.
+"""Reference numbers for crates/mpmwatch-core/tests/it/estimators.rs, from scikit-learn's own KSG estimators.
 
-Run once, by hand, to (re)generate `tests/reference/sklearn_mi.json`; the Rust tests read the
+Run once, by hand, from crates/mpmwatch-core, to (re)generate `tests/reference/sklearn_mi.json`; the Rust tests read the
 committed JSON and need no Python:
 
     pip install scikit-learn numpy

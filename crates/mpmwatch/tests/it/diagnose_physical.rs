@@ -1,4 +1,4 @@
-//! State limits of a physical nominal model ([`mpmwatch_diagnose::physical`]): a simulated
+//! State limits of a physical nominal model ([`mpmwatch_diagnose::PhysicalModel`]): a simulated
 //! two-tank plant whose upper tank overflows, diagnosed against the same Torricelli model without
 //! the overflow, must be named a saturation of the upper tank at about the true rim; the same
 //! plant without overflow, its output buried in slow coloured noise, must yield no finding; and
