@@ -54,13 +54,19 @@ impl Arx {
     }
 
     /// Identifies `y(t) = −a₁y(t−1) − … + Σᵢ Σₖ bᵢₖ uᵢ(t−dᵢ−k) + c` by least squares on `rows`
-    /// (each row must have its lags inside the record: rows start at the longest lag at the
-    /// earliest). `None` when the fit fails (a value that is not finite).
+    /// (rows before the longest lag are skipped, so every regressor is inside the record).
+    /// `None` when the fit cannot be made: `nb` = 0, a dead-time list of the wrong length, an
+    /// input or output shorter than `rows`, no row left after the lags, or a value that is not
+    /// finite.
     pub fn fit(y: &[f64], u: &[&[f64]], orders: &ArxOrders, rows: std::ops::Range<usize>) -> Option<Self> {
         use crate::numerics::{lagged, least_squares};
         let delays: Vec<usize> =
             if orders.delays.is_empty() { vec![0; u.len()] } else { orders.delays.clone() };
-        if delays.len() != u.len() {
+        if orders.nb == 0
+            || delays.len() != u.len()
+            || y.len() < rows.end
+            || u.iter().any(|x| x.len() < rows.end)
+        {
             return None;
         }
         let ones = vec![1.0; y.len()];
@@ -71,7 +77,11 @@ impl Arx {
         let mut refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
         refs.push(&ones);
         let lag = delays.iter().map(|d| (d + orders.nb).saturating_sub(1)).max().unwrap_or(0).max(orders.na);
-        let th = least_squares(&refs, y, rows.start.max(lag)..rows.end)?;
+        let first = rows.start.max(lag);
+        if first >= rows.end {
+            return None;
+        }
+        let th = least_squares(&refs, y, first..rows.end)?;
         let mut a = vec![1.0];
         a.extend(th[..orders.na].iter().map(|v| -v));
         let b = (0..u.len())
@@ -95,8 +105,12 @@ impl Arx {
         self.offset
     }
 
-    /// The steady-state output for constant inputs `u0` (NaN for an integrator).
+    /// The steady-state output for constant inputs `u0`, one per input (NaN for an integrator
+    /// or a wrong count of inputs).
     pub fn rest_output(&self, u0: &[f64]) -> f64 {
+        if u0.len() != self.b.len() {
+            return f64::NAN;
+        }
         let den: f64 = self.a.iter().sum();
         let num: f64 =
             self.offset + self.b.iter().zip(u0).map(|(bi, u)| bi.iter().sum::<f64>() * u).sum::<f64>();
@@ -166,7 +180,7 @@ impl Arx {
     }
 
     fn exogenous(&self, u: &[Vec<f64>], t: usize) -> f64 {
-        let mut s = 0.0;
+        let mut s = self.offset;
         for ((bi, nk), ui) in self.b.iter().zip(&self.delays).zip(u) {
             for (j, b) in bi.iter().enumerate() {
                 if let Some(idx) = t.checked_sub(nk + j) {
@@ -250,7 +264,7 @@ impl ArxPredictor {
             self.u_past.pop_back();
             self.u_past.push_front(u.to_vec());
         }
-        let mut v = 0.0;
+        let mut v = m.offset;
         for (i, (bi, nk)) in m.b.iter().zip(&m.delays).enumerate() {
             for (j, b) in bi.iter().enumerate() {
                 v += b * self.u_past[nk + j][i];
@@ -313,6 +327,17 @@ mod tests {
         assert!((rest - (1.5 + 0.3 * 2.0) / 0.4).abs() < 1e-9);
         let flat = m.simulate_from(&[&[2.0; 20]], rest).unwrap();
         assert!(flat.iter().all(|v| (v - rest).abs() < 1e-9));
+        // From the past (input 2, output y0 = 10) a step to 4 at t = 1: by hand with
+        // y(t) = 0.6 y(t-1) + 0.5 u(t-2) - 0.2 u(t-3) + 1.5.
+        let s = m.simulate_from(&[&[2.0, 4.0, 4.0, 4.0, 4.0]], 10.0).unwrap();
+        let want = [8.1, 6.96, 6.276, 6.8656, 6.81936];
+        assert!(s.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-9), "{s:?}");
+        // The offset is part of every simulation, not only `simulate_from`.
+        let sim = m.simulate(&[vec![2.0; 400]]).unwrap();
+        assert!((sim[399] - rest).abs() < 1e-9);
+        assert!(Arx::fit(&y, &[&u], &ArxOrders { nb: 0, ..orders.clone() }, 0..300).is_none());
+        assert!(Arx::fit(&y, &[&u], &orders, 0..301).is_none());
+        assert!(Arx::fit(&y, &[&u], &orders, 0..3).is_none());
     }
 
     #[test]

@@ -9,7 +9,8 @@ use nalgebra::{DMatrix, DVector};
 const RCOND: f64 = 1e-10;
 
 /// Least squares `min ‖X θ − y‖` over the rows `rows` of the columns `cols` (each a full-length
-/// series). Returns `None` when a value is not finite.
+/// series). Returns `None` when a value is not finite, when there are no rows, or when a row is
+/// past the end of `y` or of a column.
 pub fn least_squares(cols: &[&[f64]], y: &[f64], rows: std::ops::Range<usize>) -> Option<Vec<f64>> {
     least_squares_rows(cols, y, &rows.collect::<Vec<_>>())
 }
@@ -21,6 +22,9 @@ pub fn least_squares_rows(cols: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<
         return Some(Vec::new());
     }
     let n = rows.len();
+    if n == 0 || rows.iter().any(|&r| r >= y.len() || cols.iter().any(|c| r >= c.len())) {
+        return None;
+    }
     let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows[r]]);
     let b = DVector::from_fn(n, |r, _| y[rows[r]]);
     let svd = x.svd(true, true);
@@ -44,6 +48,10 @@ pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: &[usize])
         return None;
     }
     let n = rows.len();
+    let len = cols.iter().chain(inst).map(|c| c.len()).min().unwrap_or(0).min(y.len());
+    if n == 0 || rows.iter().any(|&r| r >= len) {
+        return None;
+    }
     let x = DMatrix::from_fn(n, p, |r, c| cols[c][rows[r]]);
     let z = DMatrix::from_fn(n, p, |r, c| inst[c][rows[r]]);
     let b = DVector::from_fn(n, |r, _| y[rows[r]]);
@@ -62,7 +70,9 @@ pub fn instrumental(cols: &[&[f64]], inst: &[&[f64]], y: &[f64], rows: &[usize])
 
 /// R² of `y` on the columns plus a constant (all of the same length): the share of `y`'s
 /// variance the least-squares fit explains, in [0, 1]; 0 when `y` is constant, when there are
-/// fewer than two rows per coefficient, or when the fit fails.
+/// fewer than two rows per coefficient, or when the fit fails. Columns are standardised first
+/// (constant ones dropped), so the singular-value cut-off does not depend on their units: a
+/// feature a million times larger than another cannot push the smaller one below it.
 pub fn r_squared(y: &[f64], cols: &[Vec<f64>]) -> f64 {
     let n = y.len();
     if n < 2 * (cols.len() + 1) {
@@ -73,8 +83,16 @@ pub fn r_squared(y: &[f64], cols: &[Vec<f64>]) -> f64 {
     if sst <= 0.0 {
         return 0.0;
     }
+    let std_cols: Vec<Vec<f64>> = cols
+        .iter()
+        .filter_map(|c| {
+            let m = c.iter().sum::<f64>() / n as f64;
+            let s = (c.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n as f64).sqrt();
+            (s > 1e-12).then(|| c.iter().map(|v| (v - m) / s).collect())
+        })
+        .collect();
     let ones = vec![1.0; n];
-    let mut refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    let mut refs: Vec<&[f64]> = std_cols.iter().map(Vec::as_slice).collect();
     refs.push(&ones);
     let Some(theta) = least_squares(&refs, y, 0..n) else { return 0.0 };
     let sse: f64 = (0..n)
@@ -94,9 +112,13 @@ pub struct Projector {
 
 impl Projector {
     /// An orthonormal basis of the features on `rows` (thin SVD; directions with singular values
-    /// below 1e-8 of the largest are dropped, so collinear features cost nothing).
+    /// below 1e-8 of the largest are dropped, so collinear features cost nothing). No features,
+    /// no rows or features shorter than `rows` give the projection on nothing (every `P x` = 0).
     pub fn new(features: &[Vec<f64>], rows: std::ops::Range<usize>) -> Self {
         let n = rows.len();
+        if n == 0 || features.is_empty() || features.iter().any(|f| f.len() < rows.end) {
+            return Self { q: DMatrix::zeros(n, 0) };
+        }
         let x = DMatrix::from_fn(n, features.len(), |r, c| features[c][rows.start + r]);
         let svd = x.svd(true, false);
         let smax = svd.singular_values.max();
@@ -152,6 +174,37 @@ mod tests {
         let y: Vec<f64> = x.iter().map(|v| 3.0 - 2.0 * v).collect();
         assert!((r_squared(&y, std::slice::from_ref(&x)) - 1.0).abs() < 1e-12);
         assert_eq!(r_squared(&[4.0; 100], &[x]), 0.0);
+    }
+
+    #[test]
+    fn r_squared_does_not_depend_on_the_columns_units() {
+        let x: Vec<f64> = (0..200).map(|t| (t as f64 * 0.37).sin()).collect();
+        let z: Vec<f64> = (0..200).map(|t| ((t * 7919) % 17) as f64).collect();
+        let y: Vec<f64> = x.iter().zip(&z).map(|(a, b)| a + 1e-3 * b + 0.1 * (a * b).cos()).collect();
+        let small = r_squared(&y, &[x.clone(), z.clone()]);
+        let big = r_squared(&y, &[x, z.iter().map(|v| v * 1e12).collect()]);
+        assert!((small - big).abs() < 1e-9, "{small} vs {big}");
+        assert!(small > 0.5 && small < 1.0);
+    }
+
+    #[test]
+    fn degenerate_designs_are_none_not_a_panic() {
+        let x = [1.0, 2.0, 3.0];
+        assert_eq!(least_squares(&[&x], &x, 0..0), None);
+        assert_eq!(least_squares(&[&x], &x, 0..4), None);
+        assert_eq!(least_squares(&[&x], &[1.0, f64::NAN, 2.0], 0..3), None);
+        assert_eq!(instrumental(&[&x], &[&x], &x, &[]), None);
+        assert_eq!(Projector::new(&[], 0..3).project(&x), vec![0.0; 3]);
+    }
+
+    #[test]
+    fn projection_drops_collinear_features() {
+        let a: Vec<f64> = (0..30).map(|t| (t as f64 * 0.3).sin()).collect();
+        let b: Vec<f64> = a.iter().map(|v| 2.0 * v).collect();
+        let p = Projector::new(&[a.clone(), b], 0..30);
+        assert_eq!(p.q.ncols(), 1, "two collinear features span one direction");
+        let pa = p.project(&a);
+        assert!(pa.iter().zip(&a).all(|(u, v)| (u - v).abs() < 1e-9));
     }
 
     #[test]
