@@ -140,7 +140,7 @@ pub struct MiEstimate {
 /// levels (a PRBS dither) and KSG1 otherwise.
 ///
 /// ```
-/// use mpmwatch::info::{mutual_information, MiOptions};
+/// use mpmwatch_core::info::{mutual_information, MiOptions};
 /// let x: Vec<f64> = (0..500).map(|i| (i as f64 * 0.37).sin()).collect();
 /// let y: Vec<f64> = x.iter().enumerate().map(|(i, v)| v + 0.1 * (i as f64 * 1.3).cos()).collect();
 /// let est = mutual_information(&x, &y, &MiOptions::default()).unwrap();
