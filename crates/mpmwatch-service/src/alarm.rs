@@ -74,13 +74,16 @@ pub struct AlarmEvent {
     pub dither: String,
     /// CV tag.
     pub cv: String,
-    /// Which statistic decided: `norm_mi`, `lag_mi` (one lag above its own critical value) or
-    /// `joint_mi` (two-lag embedding).
+    /// Which statistic decided: `lag_mi` (MI at one lag), `joint_mi` (two-lag embedding),
+    /// `ccf` (cross-correlation at one lag) or, under method `paper`, `norm_mi`.
     pub statistic: String,
-    /// Its value, bits.
+    /// Its value: bits for MI statistics, the absolute correlation for `ccf`.
     pub value_bits: f64,
-    /// Its surrogate critical value μ + zσ, bits.
+    /// Its critical value, same units.
     pub critical_bits: f64,
+    /// The element's p-value in that run (absent in events stored before it was recorded).
+    #[serde(default)]
+    pub p_value: Option<f64>,
     /// The channel's verdict in that run (`mismatch`, `clean`, `implicated_by_feedback`).
     pub verdict: String,
     /// Wall-clock time of the run, RFC 3339.

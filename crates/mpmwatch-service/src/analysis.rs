@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use mpmwatch_core::detect::{self, Cell, LagChoice, MatrixOptions, MatrixResult, Signal, Verdict};
+use mpmwatch_core::detect::{self, Cell, Evidence, LagChoice, MatrixOptions, MatrixResult, Method, Signal, Verdict};
 use mpmwatch_core::info::{Lags, MiOptions, SurrogateOptions};
 
 use super::config::ControllerConfig;
@@ -57,15 +57,16 @@ pub struct ChannelSummary {
     pub value_bits: f64,
     /// Significant on the norm, on one lag, or on the joint embedding.
     pub significant: bool,
-    /// The statistic that decided (`norm_mi`, `lag_mi`, `joint_mi`).
+    /// The statistic that decided, or the strongest when none did (`norm_mi`, `lag_mi`,
+    /// `joint_mi`, `ccf`).
     pub statistic: String,
-    /// Its value, bits.
+    /// Its value: bits for MI statistics, the absolute correlation for `ccf`.
     pub statistic_bits: f64,
-    /// Its critical value, bits.
+    /// Its critical value, same units.
     pub statistic_critical_bits: f64,
-    /// Lag whose MI exceeds its own critical value the most.
+    /// The lag of the deciding statistic, when significant.
     pub peak_lag: Option<usize>,
-    /// Empirical p-value of the norm.
+    /// The element's p-value: of the family-wise maximum, or of the norm (method `paper`).
     pub p_value: f64,
     /// `mismatch`, `clean` or `implicated_by_feedback`.
     pub verdict: String,
@@ -105,8 +106,12 @@ pub struct RunReport {
     pub cv: Vec<String>,
     /// Surrogates per element and the σ multiplier.
     pub surrogates: usize,
-    /// σ multiplier.
+    /// σ multiplier (method `paper`).
     pub sigma: f64,
+    /// Decision rule.
+    pub method: Method,
+    /// False-alarm rate per element (method `family`).
+    pub alpha: f64,
     /// Channels, row-major (cv, then mv).
     pub channels: Vec<ChannelSummary>,
     /// The full result (profiles), for `/profile`.
@@ -117,6 +122,8 @@ pub struct RunReport {
 /// The matrix options of a controller.
 pub fn options(c: &ControllerConfig) -> MatrixOptions {
     MatrixOptions {
+        method: c.method,
+        alpha: c.alpha,
         lags: LagChoice::Fixed(Lags { min: c.lag_min, max: c.lag_max }),
         mi: MiOptions::with_k(c.k),
         surrogates: SurrogateOptions {
@@ -150,6 +157,8 @@ impl RunReport {
             cv: c.cv.clone(),
             surrogates: c.surrogates,
             sigma: c.sigma,
+            method: c.method,
+            alpha: c.alpha,
             channels: Vec::new(),
             result: None,
         }
@@ -219,17 +228,14 @@ fn summarise(c: &ControllerConfig, r: &MatrixResult) -> Vec<ChannelSummary> {
         .map(|cell| {
             let p = &cell.pairwise;
             let ch = r.channels.iter().find(|ch| ch.mv_index == cell.mv && ch.cv_index == cell.cv);
-            let (statistic, value, critical) = if p.norm_significant {
-                ("norm_mi", p.norm, p.threshold.critical)
-            } else if let Some(lag) = p.peak_lag
-                && let Some(k) = p.lags.iter().position(|&l| l == lag)
-            {
-                ("lag_mi", p.profile[k], p.lag_critical[k])
-            } else if let Some(j) = cell.joint.as_ref().filter(|j| j.significant) {
-                ("joint_mi", j.norm, j.threshold.critical)
-            } else {
-                ("norm_mi", p.norm, p.threshold.critical)
+            let d = &cell.decision;
+            let (statistic, in_bits) = match d.evidence {
+                Evidence::NormMi => ("norm_mi", true),
+                Evidence::LagMi => ("lag_mi", true),
+                Evidence::JointMi => ("joint_mi", true),
+                Evidence::Ccf => ("ccf", false),
             };
+            let unit = |v: f64| if in_bits { bits(v) } else { v };
             ChannelSummary {
                 mv: c.mv[cell.mv].clone(),
                 dither: c.dither[cell.mv].clone(),
@@ -241,10 +247,10 @@ fn summarise(c: &ControllerConfig, r: &MatrixResult) -> Vec<ChannelSummary> {
                 value_bits: bits(cell.value),
                 significant: cell.significant,
                 statistic: statistic.into(),
-                statistic_bits: bits(value),
-                statistic_critical_bits: bits(critical),
-                peak_lag: p.peak_lag,
-                p_value: p.p_value,
+                statistic_bits: unit(d.value),
+                statistic_critical_bits: unit(d.critical),
+                peak_lag: d.significant.then_some(d.lag).flatten(),
+                p_value: d.p_value,
                 verdict: ch.map_or("clean", |ch| verdict_name(ch.verdict)).into(),
                 reason: ch.map(|ch| ch.reason.clone()).unwrap_or_default(),
             }

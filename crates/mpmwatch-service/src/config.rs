@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use mpmwatch_core::detect::Method;
 use mpmwatch_core::model::{DiscreteTf, Hammerstein, MimoModel, StaticMap};
 
 /// A configuration that could not be read or that failed validation.
@@ -357,7 +358,16 @@ pub struct ControllerConfig {
     /// Surrogates per element.
     #[serde(default = "default_surrogates")]
     pub surrogates: usize,
-    /// σ multiplier of the critical value μ + zσ.
+    /// Decision rule: `family` (one test per element over lags and statistics at `alpha`) or
+    /// `paper` (μ + σ·sigma per statistic, eq 11).
+    #[serde(default = "default_method")]
+    pub method: Method,
+    /// False-alarm rate per element and analysis (method `family`). A controller of m
+    /// elements analysed on independent windows raises about m·alpha false significances per
+    /// window; see docs/detection.md for false alarms per day.
+    #[serde(default = "default_alpha")]
+    pub alpha: f64,
+    /// σ multiplier of the critical value μ + zσ (method `paper`).
     #[serde(default = "default_sigma")]
     pub sigma: f64,
     /// Also test the joint embedding of two consecutive dither lags (doubles the cost).
@@ -401,6 +411,12 @@ fn default_k() -> usize {
 }
 fn default_surrogates() -> usize {
     50
+}
+fn default_method() -> Method {
+    Method::Family
+}
+fn default_alpha() -> f64 {
+    0.001
 }
 fn default_sigma() -> f64 {
     6.0
@@ -665,6 +681,9 @@ impl ControllerConfig {
                 "{key}.surrogates: {} must be at least 2 (30 or more is sensible)",
                 self.surrogates
             ));
+        }
+        if !(self.alpha > 0.0 && self.alpha < 0.5) {
+            p.push(format!("{key}.alpha: {} must be between 0 and 0.5 (0.001 is the default)", self.alpha));
         }
         if !(self.sigma.is_finite() && self.sigma > 0.0) {
             p.push(format!("{key}.sigma: {} must be positive", self.sigma));

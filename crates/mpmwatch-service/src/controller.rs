@@ -270,6 +270,7 @@ impl Controller {
                     statistic: ch.statistic.clone(),
                     value_bits: ch.statistic_bits,
                     critical_bits: ch.statistic_critical_bits,
+                    p_value: Some(ch.p_value),
                     verdict: ch.verdict.clone(),
                     time: report.time.clone(),
                     data_time: report.last_time.unwrap_or(f64::NAN),

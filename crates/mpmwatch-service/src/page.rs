@@ -26,9 +26,10 @@ table.m td.alarm { border-color: #d00; }
 </head>
 <body>
 <h1>mpmwatch: model–plant mismatch monitor</h1>
-<div class="sub">Each cell: norm of MI between the dither (column) and the residual of the CV (row), in bits, and its
-surrogate critical value; a channel is also significant when the MI at one lag exceeds that lag's own critical value
-("lag N"). Grey: below it (no evidence of mismatch); orange to red: above it. A red frame: alarm raised.
+<div class="sub">Each cell: norm of MI between the dither (column) and the residual of the CV (row), in bits, and the
+element's p-value. Under the default rule an element is significant when its p-value is at most alpha: one test over
+every lag of MI, joint-lag MI and the cross-correlation; the cell names the statistic and lag that decided.
+Grey: no evidence of mismatch; orange to red: significant. A red frame: alarm raised.
 Refreshes every 3 s. <span id="stamp"></span></div>
 <div id="root">loading…</div>
 <script>
@@ -61,13 +62,14 @@ async function refresh() {
           const ratio = ch.statistic_critical_bits > 0 ? ch.statistic_bits / ch.statistic_critical_bits : 0;
           const cls = alarms.has(`${d}→${cv}`) ? ' class="alarm"' : '';
           html += `<td${cls} style="background:${colour(ratio, ch.significant)}" title="${esc(ch.reason)}">` +
-            `${ch.norm_bits.toFixed(4)}<br><small>crit ${ch.critical_bits.toFixed(4)}</small><br><small>${esc(ch.verdict)}` +
-            (ch.significant && ch.statistic === 'lag_mi' ? ` (lag ${ch.peak_lag})` : '') +
-            (ch.significant && ch.statistic === 'joint_mi' ? ' (joint lags)' : '') + '</small></td>';
+            `${ch.norm_bits.toFixed(4)}<br><small>p = ${ch.p_value.toExponential(1)}</small><br><small>${esc(ch.verdict)}` +
+            (ch.significant ? ` (${esc(ch.statistic)}${ch.peak_lag != null ? ', lag ' + ch.peak_lag : ''})` : '') +
+            '</small></td>';
         });
         html += '</tr>';
       });
-      html += `</table><div class="meta">run ${esc(m.time)}, ${m.n} samples, ${m.surrogates} surrogates, z = ${m.sigma}, ` +
+      html += `</table><div class="meta">run ${esc(m.time)}, ${m.n} samples, up to ${m.surrogates} surrogates, ` +
+        (m.method === 'paper' ? `paper's rule, z = ${m.sigma}, ` : `alpha = ${m.alpha} per element, `) +
         `${m.duration_s.toFixed(2)} s</div></div>`;
     }
     document.getElementById('root').innerHTML = html || 'no controllers configured';

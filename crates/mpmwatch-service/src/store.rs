@@ -267,6 +267,7 @@ mod tests {
             statistic: "norm_mi".into(),
             value_bits: 0.1,
             critical_bits: 0.05,
+            p_value: Some(1e-4),
             verdict: "mismatch".into(),
             time: "2026-01-01T00:00:00Z".into(),
             data_time: 10.0,

@@ -7,7 +7,10 @@ use serde::Serialize;
 
 use crate::info::correlation::{ccf, ccf_limit, family_wise_z, pearson};
 use crate::info::significance::test_prepared;
-use crate::info::{InfoError, LaggedPair, Lags, MiOptions, SurrogateOptions, Threshold, auto_tmax};
+use crate::info::{
+    FamilyOptions, FamilyTest, InfoError, LaggedPair, Lags, MiOptions, Statistic, SurrogateOptions, Threshold,
+    auto_tmax, family_test,
+};
 
 use super::partial::partial_out;
 use super::verdict::{Channel, localise};
@@ -35,9 +38,31 @@ pub enum LagChoice {
     },
 }
 
+/// The decision rule of an element.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize, strum::EnumString, strum::Display, strum::VariantNames,
+)]
+#[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
+pub enum Method {
+    /// One family-wise test over lags and statistics (pairwise MI, joint-lag MI, CCF) at a
+    /// stated false-alarm rate `alpha` per element ([`crate::info::family_test`]).
+    Family,
+    /// The paper's recipe: the norm of MI or any lag's MI above its surrogate `μ + zσ`, and the
+    /// joint-lag norm likewise. Kept for comparison and for `reproduce`.
+    Paper,
+}
+
 /// Options of the matrix.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MatrixOptions {
+    /// The decision rule.
+    pub method: Method,
+    /// False-alarm rate per element of [`Method::Family`]: the probability that an element
+    /// whose submodel is right is called significant in one analysis. A matrix of m elements
+    /// raises at most m·alpha false elements per analysis on average (Bonferroni: set
+    /// `alpha = a / m` for a matrix-wide rate a). Default 0.01.
+    pub alpha: f64,
     /// Lag range.
     pub lags: LagChoice,
     /// Estimator options.
@@ -62,6 +87,8 @@ pub struct MatrixOptions {
 impl Default for MatrixOptions {
     fn default() -> Self {
         Self {
+            method: Method::Family,
+            alpha: 0.01,
             lags: LagChoice::Fixed(Lags { min: 1, max: 20 }),
             mi: MiOptions::default(),
             surrogates: SurrogateOptions::default(),
@@ -134,6 +161,29 @@ impl ElementTest {
     }
 }
 
+impl ElementTest {
+    /// One MI statistic's view of a family-wise test: its profile with the family-wise critical
+    /// value per lag, its norm against the calibration surrogates' norms (shown, not decided
+    /// on), and `significant` when the family is and this statistic holds its maximum.
+    fn from_family(t: &FamilyTest, statistic: Statistic, z: f64) -> Self {
+        let p = t.profiles.iter().find(|p| p.statistic == statistic).expect("the statistic was tested");
+        let holds_max = t.significant && t.argmax.0 == statistic;
+        Self {
+            lags: t.lags.clone(),
+            profile: p.values.clone(),
+            lag_critical: p.critical.clone(),
+            norm: p.norm,
+            threshold: Threshold { mean: p.norm_mean, std: p.norm_std, critical: p.norm_mean + z * p.norm_std },
+            p_value: t.p_value,
+            norm_significant: false,
+            peak_lag: holds_max.then_some(t.argmax.1),
+            significant: holds_max,
+            method: t.method,
+            seed: t.seed,
+        }
+    }
+}
+
 /// The linear baselines of one element.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CcfBaseline {
@@ -153,6 +203,41 @@ pub struct CcfBaseline {
     pub pearson_limit: f64,
 }
 
+/// The evidence that decided an element (or, when none did, the strongest).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Evidence {
+    /// The norm of MI over the lag range (paper).
+    NormMi,
+    /// MI at one lag.
+    LagMi,
+    /// The joint-lag MI (its norm under the paper's rule, one lag under the family rule).
+    JointMi,
+    /// The cross-correlation at one lag (family rule).
+    Ccf,
+}
+
+/// The decision on one element, the same shape under either rule.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Decision {
+    /// The rule applied.
+    pub method: Method,
+    /// Significant at the rule's level.
+    pub significant: bool,
+    /// The p-value: of the family's maximum (family), or the norm's empirical one (paper).
+    pub p_value: f64,
+    /// The false-alarm rate tested at (family only).
+    pub alpha: Option<f64>,
+    /// Which statistic decided.
+    pub evidence: Evidence,
+    /// At which lag, when the statistic is one lag's.
+    pub lag: Option<usize>,
+    /// Its value: nats for MI, the absolute correlation for the CCF.
+    pub value: f64,
+    /// Its critical value, same units.
+    pub critical: f64,
+}
+
 /// Element (j, i) of the matrix: dither i against residual j.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Cell {
@@ -166,7 +251,11 @@ pub struct Cell {
     pub joint: Option<ElementTest>,
     /// Linear baselines.
     pub ccf: CcfBaseline,
-    /// True when the pairwise or the joint statistic exceeds its critical value.
+    /// The family-wise test (method `family`).
+    pub family: Option<FamilyTest>,
+    /// The decision.
+    pub decision: Decision,
+    /// `decision.significant`.
     pub significant: bool,
     /// The element of eq 21: the pairwise norm when significant, else 0 (nats). When only the
     /// joint statistic is significant, the joint norm.
@@ -192,8 +281,12 @@ pub struct MatrixResult {
     pub n: usize,
     /// Surrogates per element.
     pub surrogates: usize,
-    /// z of the MI critical values.
+    /// z of the MI critical values (method `paper`).
     pub z: f64,
+    /// The decision rule.
+    pub method: Method,
+    /// Its false-alarm rate per element (method `family`).
+    pub alpha: Option<f64>,
     /// Base seed.
     pub seed: u64,
     /// Per residual: the whitening AR model (order 0 and ratio 1 when whitening is off).
@@ -297,6 +390,8 @@ pub fn analyze(
         n,
         surrogates: opts.surrogates.count,
         z: opts.surrogates.z,
+        method: opts.method,
+        alpha: (opts.method == Method::Family).then_some(opts.alpha),
         seed: opts.surrogates.seed,
         whitening,
     })
@@ -313,13 +408,7 @@ fn cell(
     let sur =
         SurrogateOptions { seed: opts.surrogates.seed + 1000 * cv as u64 + mv as u64, ..opts.surrogates };
     let pair = LaggedPair::new(d.values, r.values, lags, 1, &opts.mi)?;
-    let pairwise = ElementTest::from(test_prepared(&pair, &sur)?);
-    let joint = if opts.joint_embedding {
-        let pair2 = LaggedPair::new(d.values, r.values, lags, 2, &opts.mi)?;
-        Some(ElementTest::from(test_prepared(&pair2, &SurrogateOptions { seed: sur.seed ^ 0x5eed, ..sur })?))
-    } else {
-        None
-    };
+    let pair2 = if opts.joint_embedding { Some(LaggedPair::new(d.values, r.values, lags, 2, &opts.mi)?) } else { None };
     let ccf_values = ccf(d.values, r.values, lags.min as i64..=lags.max as i64)?;
     let z = family_wise_z(opts.ccf_alpha, lags.len());
     let limit = ccf_limit(d.values.len(), z);
@@ -333,14 +422,86 @@ fn cell(
         pearson_r: p.r,
         pearson_limit: p.limit,
     };
-    let joint_sig = joint.as_ref().is_some_and(|j| j.significant);
-    let significant = pairwise.significant || joint_sig;
-    let value = if pairwise.significant {
-        pairwise.norm
-    } else if joint_sig {
+    let (pairwise, joint, family, decision) = match opts.method {
+        Method::Paper => {
+            let pairwise = ElementTest::from(test_prepared(&pair, &sur)?);
+            let joint = match &pair2 {
+                Some(p2) => Some(ElementTest::from(test_prepared(p2, &SurrogateOptions { seed: sur.seed ^ 0x5eed, ..sur })?)),
+                None => None,
+            };
+            let decision = paper_decision(&pairwise, joint.as_ref());
+            (pairwise, joint, None, decision)
+        }
+        Method::Family => {
+            let fo = FamilyOptions { alpha: opts.alpha, surrogates: sur, ..FamilyOptions::default() };
+            let t = family_test(&pair, pair2.as_ref(), &fo)?;
+            let pairwise = ElementTest::from_family(&t, Statistic::Mi, opts.surrogates.z);
+            let joint = pair2.is_some().then(|| ElementTest::from_family(&t, Statistic::JointMi, opts.surrogates.z));
+            let decision = family_decision(&t);
+            (pairwise, joint, Some(t), decision)
+        }
+    };
+    let value = if !decision.significant {
+        0.0
+    } else if decision.evidence == Evidence::JointMi {
         joint.as_ref().map_or(0.0, |j| j.norm)
     } else {
-        0.0
+        pairwise.norm
     };
-    Ok(Cell { mv, cv, pairwise, joint, ccf, significant, value })
+    Ok(Cell { mv, cv, pairwise, joint, ccf, family, significant: decision.significant, decision, value })
+}
+
+fn paper_decision(pairwise: &ElementTest, joint: Option<&ElementTest>) -> Decision {
+    let base = Decision {
+        method: Method::Paper,
+        significant: pairwise.significant || joint.is_some_and(|j| j.significant),
+        p_value: pairwise.p_value,
+        alpha: None,
+        evidence: Evidence::NormMi,
+        lag: None,
+        value: pairwise.norm,
+        critical: pairwise.threshold.critical,
+    };
+    if pairwise.norm_significant {
+        base
+    } else if let Some(lag) = pairwise.peak_lag
+        && let Some(k) = pairwise.lags.iter().position(|&l| l == lag)
+    {
+        Decision {
+            evidence: Evidence::LagMi,
+            lag: Some(lag),
+            value: pairwise.profile[k],
+            critical: pairwise.lag_critical[k],
+            ..base
+        }
+    } else if let Some(j) = joint.filter(|j| j.significant) {
+        Decision { evidence: Evidence::JointMi, value: j.norm, critical: j.threshold.critical, p_value: j.p_value, ..base }
+    } else {
+        base
+    }
+}
+
+fn family_decision(t: &FamilyTest) -> Decision {
+    let (statistic, lag) = t.argmax;
+    let profile = t.profiles.iter().find(|p| p.statistic == statistic).expect("the argmax names a tested statistic");
+    let k = t.lags.iter().position(|&l| l == lag).expect("the argmax lag is in the range");
+    let evidence = match statistic {
+        Statistic::Mi => Evidence::LagMi,
+        Statistic::JointMi => Evidence::JointMi,
+        Statistic::Ccf => Evidence::Ccf,
+    };
+    let (value, critical) = match statistic {
+        Statistic::Ccf => (profile.values[k].abs(), profile.mean[k].abs() + t.critical_z * profile.std[k]),
+        _ => (profile.values[k], profile.critical[k]),
+    };
+    Decision {
+        method: Method::Family,
+        significant: t.significant,
+        p_value: t.p_value,
+        alpha: Some(t.alpha),
+        evidence,
+        lag: Some(lag),
+        value,
+        critical,
+    }
 }

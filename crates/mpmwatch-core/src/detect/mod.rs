@@ -8,7 +8,9 @@ mod partial;
 mod verdict;
 mod whiten;
 
-pub use matrix::{CcfBaseline, Cell, ElementTest, LagChoice, MatrixOptions, MatrixResult, Signal, analyze};
+pub use matrix::{
+    CcfBaseline, Cell, Decision, ElementTest, Evidence, LagChoice, MatrixOptions, MatrixResult, Method, Signal, analyze,
+};
 pub use partial::partial_out;
 pub use verdict::{Channel, Verdict, localise};
 pub use whiten::ArWhitener;

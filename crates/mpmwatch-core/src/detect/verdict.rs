@@ -65,7 +65,17 @@ pub fn localise(
                 (0..residuals.len()).filter(|&jj| jj != j && sig(i, jj)).map(|jj| residuals[jj].name).collect();
             let row_others: Vec<&str> =
                 (0..dithers.len()).filter(|&ii| ii != i && sig(ii, j)).map(|ii| dithers[ii].name).collect();
-            let stat = if c.pairwise.significant { "norm of MI" } else { "joint-lag MI" };
+            let stat = match (c.decision.evidence, c.decision.lag) {
+                (super::Evidence::NormMi, _) => "norm of MI".to_string(),
+                (super::Evidence::LagMi, Some(l)) => format!("MI at lag {l}"),
+                (super::Evidence::JointMi, Some(l)) => format!("joint-lag MI at lags {l}, {}", l + 1),
+                (super::Evidence::Ccf, Some(l)) => format!("cross-correlation at lag {l}"),
+                (e, None) => format!("{e:?}"),
+            };
+            let stat = match c.decision.alpha {
+                Some(a) => format!("{stat} (p = {:.2e}, alpha {a})", c.decision.p_value),
+                None => stat,
+            };
             let (verdict, reason) = if !c.significant {
                 let why = if col_others.is_empty() {
                     format!("no residual carries information about {mv} (Proposition 2)")

@@ -222,6 +222,38 @@ impl<'a> LaggedPair<'a> {
         self.continuous_profile(x_new)
     }
 
+    /// Cross-correlation of x(t) with y(t+τ) over the same sample pairs as the MI profile, with
+    /// x circularly shifted by `shift` (0 for the observed series). A circular shift keeps x's
+    /// mean and spread, so they are taken once over the whole series.
+    pub fn linear_profile_shifted(&self, shift: usize) -> Vec<f64> {
+        let n = self.x.len();
+        self.correlations(|t| self.x[(t + shift) % n])
+    }
+
+    /// [`Self::linear_profile_shifted`] with x replaced by `x_new` (an iAAFT surrogate).
+    pub fn linear_profile_with_x(&self, x_new: &[f64]) -> Vec<f64> {
+        debug_assert_eq!(x_new.len(), self.x.len());
+        self.correlations(|t| x_new[t])
+    }
+
+    fn correlations(&self, x_at: impl Fn(usize) -> f64) -> Vec<f64> {
+        let n = self.x.len();
+        let mx = crate::numerics::mean(self.x);
+        let sx = (self.x.iter().map(|v| (v - mx).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let my = crate::numerics::mean(&self.y);
+        let sy = (self.y.iter().map(|v| (v - my).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let t0 = self.width - 1;
+        let np = self.n_pairs;
+        let xc: Vec<f64> = (t0..t0 + np).map(|t| x_at(t) - mx).collect();
+        self.lags
+            .iter()
+            .map(|tau| {
+                let s: f64 = xc.iter().zip(&self.y[t0 + tau..t0 + tau + np]).map(|(a, b)| a * (b - my)).sum();
+                s / (np as f64 * sx * sy)
+            })
+            .collect()
+    }
+
     fn continuous_profile(&self, x: &[f64]) -> Vec<f64> {
         let x: Vec<f64> = x.iter().map(|v| v / self.x_scale).collect();
         let t0 = self.width - 1;

@@ -10,6 +10,7 @@ pub(crate) mod discrete;
 pub(crate) mod entropy;
 mod error;
 mod estimator;
+pub(crate) mod family;
 mod ksg;
 pub(crate) mod lagged;
 pub(crate) mod marginal;
@@ -25,6 +26,7 @@ pub use error::InfoError;
 pub use estimator::{
     Estimator, MiEstimate, MiOptions, Units, XKind, mutual_information, mutual_information_multi,
 };
+pub use family::{FamilyOptions, FamilyTest, PValueSource, Statistic, StatisticProfile, family_test};
 pub use lagged::{LaggedPair, LaggedProfile, Lags, auto_tmax, lagged_profile};
 pub use normalized::{estevez, joe};
 pub use significance::{LaggedTest, SurrogateMethod, SurrogateOptions, Threshold, lagged_test};

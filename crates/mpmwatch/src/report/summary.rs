@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use mpmwatch_core::detect::{MatrixResult, Verdict};
+use mpmwatch_core::detect::{Evidence, MatrixResult, Verdict};
 use mpmwatch_core::info::Units;
 
 /// One MV→CV channel, in the units of DESIGN.md §4.5.
@@ -25,6 +25,11 @@ pub struct ChannelSummary {
     pub significant: bool,
     /// Lag with the largest exceedance, if any.
     pub peak_lag: Option<usize>,
+    /// The element's p-value (DESIGN.md §4.2): of the family-wise maximum, or of the norm
+    /// under `--method paper`.
+    pub p_value: f64,
+    /// The statistic that decided, or the strongest when none did.
+    pub evidence: Evidence,
     /// Verdict.
     pub verdict: Verdict,
     /// One-line reason.
@@ -49,6 +54,8 @@ pub fn summarise(m: &MatrixResult) -> Vec<ChannelSummary> {
                 joint_threshold_bits: c.joint.as_ref().map(|j| bits(j.threshold.critical)),
                 significant: c.significant,
                 peak_lag: c.pairwise.peak_lag.or(c.joint.as_ref().and_then(|j| j.peak_lag)),
+                p_value: c.decision.p_value,
+                evidence: c.decision.evidence,
                 verdict: ch.verdict,
                 reason: ch.reason.clone(),
                 ccf_significant: c.ccf.significant,
