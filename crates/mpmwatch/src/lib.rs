@@ -11,5 +11,6 @@
 pub mod benchmark;
 pub mod demo;
 pub mod loadgen;
+pub mod power;
 pub mod report;
 pub mod tanks;

@@ -64,6 +64,11 @@ pub enum PValueSource {
 /// Options of the family-wise test.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FamilyOptions {
+    /// The share of `alpha` given to the cross-correlation; the MI statistics share the rest.
+    /// Default 0.8: a linear mismatch is the commonest, and the correlation is its most
+    /// powerful test; the MI statistics keep a fifth of the level, which is still a far more
+    /// lenient test than the paper's 6σ. See [`mi_offset`].
+    pub linear_share: f64,
     /// False-alarm rate of the element: the probability that an element with no mismatch is
     /// called significant. Default 0.01.
     pub alpha: f64,
@@ -78,7 +83,13 @@ pub struct FamilyOptions {
 
 impl Default for FamilyOptions {
     fn default() -> Self {
-        Self { alpha: 0.01, calibration: 30, exceedances: 10, surrogates: SurrogateOptions::default() }
+        Self {
+            linear_share: 0.8,
+            alpha: 0.01,
+            calibration: 30,
+            exceedances: 10,
+            surrogates: SurrogateOptions::default(),
+        }
     }
 }
 
@@ -88,6 +99,9 @@ impl FamilyOptions {
         let bad = |name, value: String, reason| Err(InfoError::InvalidParameter { name, value, reason });
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", self.alpha.to_string(), "must be between 0 and 0.5 (0.01 is a common choice)");
+        }
+        if !(self.linear_share > 0.0 && self.linear_share < 1.0) {
+            return bad("linear_share", self.linear_share.to_string(), "must be strictly between 0 and 1");
         }
         if self.calibration < 10 {
             return bad("calibration", self.calibration.to_string(), "at least 10 surrogates are needed to standardise");
@@ -127,15 +141,18 @@ pub struct StatisticProfile {
 /// The result of the family-wise test of one element.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FamilyTest {
+    /// What the standardised MI statistics were lowered by before the maximum ([`mi_offset`]).
+    pub mi_offset: f64,
     /// Lags of every profile.
     pub lags: Vec<usize>,
     /// One profile per statistic tested.
     pub profiles: Vec<StatisticProfile>,
-    /// The largest standardised statistic.
+    /// The largest standardised statistic (MI statistics lowered by `mi_offset`).
     pub max_z: f64,
     /// The statistic and lag where it sits.
     pub argmax: (Statistic, usize),
-    /// The standardised value a maximum must reach for `p = alpha` (the tail model's quantile).
+    /// The standardised value a maximum must reach for `p = alpha` (the tail model's quantile);
+    /// an MI statistic must reach it plus `mi_offset`.
     pub critical_z: f64,
     /// The p-value of the maximum.
     pub p_value: f64,
@@ -180,6 +197,21 @@ impl Gumbel {
     fn upper_quantile(&self, p: f64) -> f64 {
         self.location - self.scale * (-(-p).ln_1p()).ln()
     }
+}
+
+/// How far the standardised MI statistics are lowered before they enter the maximum, so that
+/// under the null the cross-correlation's lags carry about `linear_share` of the level and the
+/// `mi_tests` MI statistics the rest. With standard normal statistics and Bonferroni inside each
+/// group, the correlation's lags (two-sided) reach c with probability `linear_share·alpha` when
+/// `c = Φ⁻¹(1 − linear_share·alpha / (2·ccf_tests))`, and the MI statistics (one-sided) reach
+/// `c + δ` with probability `(1 − linear_share)·alpha` when
+/// `c + δ = Φ⁻¹(1 − (1 − linear_share)·alpha / mi_tests)`. The offset only weights the family:
+/// the level itself comes from the surrogates' maxima, whatever the statistics' true shapes.
+pub fn mi_offset(alpha: f64, linear_share: f64, ccf_tests: usize, mi_tests: usize) -> f64 {
+    use super::correlation::normal_quantile;
+    let c = normal_quantile(1.0 - linear_share * alpha / (2.0 * ccf_tests.max(1) as f64));
+    let c_mi = normal_quantile(1.0 - (1.0 - linear_share) * alpha / mi_tests.max(1) as f64);
+    c_mi - c
 }
 
 /// The statistics of one (surrogate) dither, concatenated: pairwise MI, joint MI, CCF.
@@ -255,12 +287,13 @@ pub fn family_test(
         mean[d] = crate::numerics::mean(&col);
         std[d] = (col.iter().map(|v| (v - mean[d]).powi(2)).sum::<f64>() / (col.len() as f64 - 1.0)).sqrt();
     }
+    let offset = mi_offset(opts.alpha, opts.linear_share, n_lags, ccf_from);
     let standardised = |s: &[f64], d: usize| -> f64 {
         if std[d] <= 0.0 {
             return f64::NEG_INFINITY;
         }
         let z = (s[d] - mean[d]) / std[d];
-        if d >= ccf_from { z.abs() } else { z }
+        if d >= ccf_from { z.abs() } else { z - offset }
     };
     let maximum = |s: &[f64]| (0..dims).map(|d| standardised(s, d)).fold(f64::NEG_INFINITY, f64::max);
     let (arg, max_z) = (0..dims)
@@ -270,7 +303,7 @@ pub fn family_test(
     // Null maxima in batches: stop when clearly null (h exceedances) or clearly significant (no
     // exceedance and a tail p-value far below alpha once the tail rests on enough maxima).
     const BATCH: usize = 10;
-    const TAIL_MIN: usize = 30;
+    const TAIL_MIN: usize = 50;
     let mut null_max: Vec<f64> = Vec::with_capacity(sur.count);
     let mut exceed = 0usize;
     let mut stopped_null = false;
@@ -320,13 +353,17 @@ pub fn family_test(
                 norm_mean,
                 norm_std,
                 values: observed[r.clone()].to_vec(),
-                critical: r.clone().map(|d| mean[d] + critical_z * std[d]).collect(),
+                critical: r
+                    .clone()
+                    .map(|d| mean[d] + (critical_z + if d >= ccf_from { 0.0 } else { offset }) * std[d])
+                    .collect(),
                 mean: mean[r.clone()].to_vec(),
                 std: std[r].to_vec(),
             }
         })
         .collect();
     Ok(FamilyTest {
+        mi_offset: offset,
         argmax: (kinds[arg / n_lags], lags[arg % n_lags]),
         lags,
         profiles,
@@ -448,6 +485,15 @@ mod tests {
             u[u.len() / 2]
         };
         assert!(median_used < 50, "a null element drew {median_used} surrogates (median)");
+    }
+
+    #[test]
+    fn the_offset_splits_the_level_as_stated() {
+        // 20 CCF lags two-sided at 0.8·0.01: Φ⁻¹(1 − 0.0002) = 3.5401; 40 MI statistics one-sided
+        // at 0.2·0.01: Φ⁻¹(1 − 0.00005) = 3.8906 (scipy.stats.norm.ppf).
+        let d = mi_offset(0.01, 0.8, 20, 40);
+        assert!((d - (3.890_591_886_413_12 - 3.540_083_799_206_174)).abs() < 1e-6, "{d}");
+        assert!(mi_offset(0.01, 0.5, 20, 20) < 0.0, "an even split over equal groups favours MI (one-sided)");
     }
 
     #[test]
