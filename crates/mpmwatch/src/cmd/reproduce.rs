@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use mpmwatch::report::figures::{XySeries, write_matrix_figures, write_xy_chart};
 use mpmwatch::report::reproduce::{ReproduceOptions, reproduce};
+use mpmwatch_core::detect::Method;
 use mpmwatch_core::info::Units;
 use serde_json::json;
 
@@ -28,6 +29,12 @@ pub struct Args {
     /// Monte Carlo runs per record length (claim 2).
     #[arg(long, default_value_t = 100)]
     length_runs: usize,
+    /// Decision rule: `family` (the default of `analyze`) or `paper` (z = 6, the paper's own).
+    #[arg(long, default_value_t = Method::Family, value_parser = super::choice::<Method>())]
+    method: Method,
+    /// False-alarm rate per element of the family rule (claim 7 uses 0.05 / m instead).
+    #[arg(long, default_value_t = 0.01)]
+    alpha: f64,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -36,6 +43,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         surrogates: args.surrogates,
         matched_seeds: args.matched_seeds,
         length_runs: args.length_runs,
+        method: args.method,
+        alpha: args.alpha,
         ..ReproduceOptions::default()
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
