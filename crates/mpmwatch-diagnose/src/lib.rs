@@ -48,7 +48,7 @@ pub use physical::{LEVEL_QUANTILES, PhysicalModel};
 pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
 
 use candidates::OutputCtx;
-use mpmwatch_core::detect::{LagChoice, MatrixOptions, MatrixResult, Signal};
+use mpmwatch_core::detect::{LagChoice, MatrixOptions, MatrixResult, Method, Signal};
 use mpmwatch_core::info::{Lags, SurrogateOptions};
 use mpmwatch_core::numerics::{lagged as delayed, least_squares, median};
 pub use select::Scoring;
@@ -286,7 +286,10 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             .iter()
             .map(|&j| Signal { name: input.outputs[j].name, values: &residuals[j][..n_train] })
             .collect();
+        // The diagnosis's localisation and its casebook were developed and measured under the
+        // paper's rule; it moves to the family rule with its own out-of-sample re-measurement.
         let mo = MatrixOptions {
+            method: Method::Paper,
             lags: LagChoice::Fixed(opts.lags),
             surrogates: SurrogateOptions {
                 count: opts.surrogates,

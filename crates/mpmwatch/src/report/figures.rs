@@ -3,8 +3,8 @@
 //! * `mi_lags`: MI against lag for every dither × residual pair, with the per-lag surrogate
 //!   critical value (the paper's Figures 3, 8, 10, 16), one panel per pair;
 //! * `ccf_lags`: the cross-correlation against lag with its ±z/√N limits (Figures 2, 9, 11, 17);
-//! * `mi_matrix`: the MI matrix as a heat map, each cell shaded by norm / critical value and
-//!   labelled with the norm in bits and the verdict;
+//! * `mi_matrix`: the MI matrix as a heat map, each cell shaded by the deciding statistic over
+//!   its critical value and labelled with the norm of MI, the element's p-value and the verdict;
 //! * `pair_<mv>_<cv>_mi` and `pair_<mv>_<cv>_ccf`: the same two plots for each pair alone.
 //!
 //! PNG text is drawn with DejaVu Sans embedded in the binary, so no system font is needed.
@@ -270,7 +270,7 @@ fn draw_heatmap<DB: DrawingBackend>(
         for i in 0..m.dithers.len() {
             let (x, y) = (left + i as i32 * w, top + j as i32 * h);
             let cell = m.cell(i, j);
-            let ratio = cell.map_or(0.0, |c| (c.pairwise.norm / c.pairwise.threshold.critical).max(0.0));
+            let ratio = cell.map_or(0.0, |c| (c.decision.value / c.decision.critical).max(0.0));
             let fill = match cell {
                 None => RGBColor(220, 220, 220),
                 Some(c) if c.significant => {
@@ -293,11 +293,7 @@ fn draw_heatmap<DB: DrawingBackend>(
                             }
                         });
                     vec![
-                        format!(
-                            "{:.4} / {:.4}",
-                            units.from_nats(c.pairwise.norm),
-                            units.from_nats(c.pairwise.threshold.critical)
-                        ),
+                        format!("{:.4}, p = {:.1e}", units.from_nats(c.pairwise.norm), c.decision.p_value),
                         verdict.to_string(),
                     ]
                 }
