@@ -681,6 +681,12 @@ impl ControllerConfig {
                 "{key}.surrogates: {} must be at least 2 (30 or more is sensible)",
                 self.surrogates
             ));
+        } else if self.method == Method::Family && self.surrogates < 20 {
+            p.push(format!(
+                "{key}.surrogates: {} is too few for method \"family\" (at least 20: its p-value rests on a tail fitted \
+                 to them; or set method = \"paper\")",
+                self.surrogates
+            ));
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             p.push(format!("{key}.alpha: {} must be between 0 and 0.5 (0.001 is the default)", self.alpha));

@@ -73,7 +73,7 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
         "[zenoh]\nmode = \"peer\"\nlisten = [\"tcp/127.0.0.1:{ZENOH}\"]\n[http]\nbind = \"127.0.0.1:{HTTP}\"\n\
          [ingest]\nqueue_messages = {QUEUE_MESSAGES}\nqueue_bytes = {QUEUE_BYTES}\n\n{}",
         opts.controller_toml(&format!(
-            "window = {WINDOW}\nmin_samples = 600\nlag_max = 5\nsurrogates = 10\nevery = 5"
+            "window = {WINDOW}\nmin_samples = 600\nlag_max = 5\nsurrogates = 10\nmethod = \"paper\"\nevery = 5"
         ))
     );
     config(&text); // valid before the child sees it
