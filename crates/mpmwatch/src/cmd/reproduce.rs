@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use mpmwatch::report::figures::{XySeries, write_matrix_figures, write_xy_chart};
-use mpmwatch::report::reproduce::{ReproduceOptions, reproduce};
+use mpmwatch::report::reproduce::{Reading, ReproduceOptions, reproduce};
 use mpmwatch_core::detect::Method;
 use mpmwatch_core::info::Units;
 use serde_json::json;
@@ -43,8 +43,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         surrogates: args.surrogates,
         matched_seeds: args.matched_seeds,
         length_runs: args.length_runs,
-        method: args.method,
         alpha: args.alpha,
+        reading: Reading::default_for(args.method),
         ..ReproduceOptions::default()
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;

@@ -14,7 +14,9 @@
 use serde::Serialize;
 
 use mpmwatch_core::detect::{LagChoice, MatrixOptions, MatrixResult, Method, Signal, analyze};
-use mpmwatch_core::info::{InfoError, Lags, MiOptions, SurrogateOptions, lagged_profile, mutual_information};
+use mpmwatch_core::info::{
+    InfoError, Lags, MiOptions, SurrogateMethod, SurrogateOptions, lagged_profile, mutual_information,
+};
 use mpmwatch_core::io::Table;
 use mpmwatch_sim::cases::{CaseName, CaseOptions, Disturbance, run};
 use mpmwatch_sim::{Excitation, SimError};
@@ -46,6 +48,76 @@ pub struct Claim {
     pub holds: bool,
     /// The measured facts behind `ours`, for programs and tests (flagged channels, rates).
     pub details: serde_json::Value,
+    /// For a claim that does not hold under the default reading: the readings of the paper's
+    /// unspecified settings that were tried, each with its result.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<Vec<SweepPoint>>,
+    /// For such a claim: the first reading under which it holds, or null when none does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holds_under: Option<Option<Reading>>,
+}
+
+/// One reading of the settings the paper leaves open.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Reading {
+    /// What differs from the default, in words.
+    pub label: &'static str,
+    /// The decision rule.
+    pub method: Method,
+    /// Pre-whiten the residuals.
+    pub whiten: bool,
+    /// KSG neighbours.
+    pub k: usize,
+    /// Largest lag; `None` for the claim's own (20 for the matrices, 5 for claim 3).
+    pub max_lag: Option<usize>,
+    /// Standard deviation of each dither.
+    pub dither_std: f64,
+    /// How surrogates are made.
+    pub surrogates: SurrogateMethod,
+}
+
+impl Reading {
+    /// The default analysis under the given rule.
+    pub const fn default_for(method: Method) -> Self {
+        Self {
+            label: "default",
+            method,
+            whiten: true,
+            k: 4,
+            max_lag: None,
+            dither_std: 1.0,
+            surrogates: SurrogateMethod::Auto,
+        }
+    }
+
+    /// The readings a sweep tries: the paper's own recipe, then one setting at a time away from
+    /// the default. The operating point is not among them: the cases fix it.
+    pub fn sweep(method: Method) -> Vec<Self> {
+        let d = Self::default_for(method);
+        vec![
+            Self { label: "the paper's recipe: 6σ rule, raw residuals", method: Method::Paper, whiten: false, ..d },
+            Self { label: "6σ rule, whitened residuals", method: Method::Paper, ..d },
+            Self { label: "raw residuals", whiten: false, ..d },
+            Self { label: "k = 3", k: 3, ..d },
+            Self { label: "k = 8", k: 8, ..d },
+            Self { label: "lags 1–5", max_lag: Some(5), ..d },
+            Self { label: "lags 1–10", max_lag: Some(10), ..d },
+            Self { label: "dither std 0.5", dither_std: 0.5, ..d },
+            Self { label: "dither std 2", dither_std: 2.0, ..d },
+            Self { label: "circular-shift surrogates", surrogates: SurrogateMethod::CircularShift, ..d },
+        ]
+    }
+}
+
+/// One reading tried for a claim and what came of it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepPoint {
+    /// The reading.
+    pub reading: Reading,
+    /// Whether the claim holds under it.
+    pub holds: bool,
+    /// What was measured under it.
+    pub ours: String,
 }
 
 /// Settings of a reproduction.
@@ -62,10 +134,14 @@ pub struct ReproduceOptions {
     pub excitation_seeds: usize,
     /// Seeds per matched case (claim 7; at least 50).
     pub matched_seeds: usize,
-    /// The decision rule.
-    pub method: Method,
-    /// Its false-alarm rate per element (family rule; claim 7 uses 0.05 / m instead).
+    /// The family rule's false-alarm rate per element (claim 7 uses 0.05 / m instead).
     pub alpha: f64,
+    /// The decision rule and the settings the paper leaves open (whitening, k, lags, dither
+    /// level, surrogates).
+    pub reading: Reading,
+    /// Sweep the readings of every claim that does not hold (`reproduce` does; the single
+    /// claims do not).
+    pub sweep: bool,
 }
 
 impl Default for ReproduceOptions {
@@ -76,8 +152,9 @@ impl Default for ReproduceOptions {
             length_runs: 100,
             excitation_seeds: 10,
             matched_seeds: 50,
-            method: Method::Family,
             alpha: MatrixOptions::default().alpha,
+            reading: Reading::default_for(Method::Family),
+            sweep: true,
         }
     }
 }
@@ -104,12 +181,14 @@ pub struct Reproduction {
 }
 
 fn matrix_options(seed: u64, opts: &ReproduceOptions, whiten: bool) -> MatrixOptions {
+    let r = &opts.reading;
     MatrixOptions {
-        method: opts.method,
+        method: r.method,
         alpha: opts.alpha,
-        lags: LagChoice::Fixed(Lags { min: 1, max: 20 }),
-        surrogates: SurrogateOptions { count: opts.surrogates, seed, ..SurrogateOptions::default() },
-        whiten: whiten.then_some(10),
+        lags: LagChoice::Fixed(Lags { min: 1, max: r.max_lag.unwrap_or(20) }),
+        mi: MiOptions::with_k(r.k),
+        surrogates: SurrogateOptions { count: opts.surrogates, seed, method: r.surrogates, ..SurrogateOptions::default() },
+        whiten: (whiten && r.whiten).then_some(10),
         ..MatrixOptions::default()
     }
 }
@@ -157,7 +236,7 @@ fn list(v: &[String]) -> String {
 
 /// Claim 1 (Figures 2–3): model 1, MI flags ε2, ε3, ε4 and not ε1; the CCF flags only ε3.
 pub fn claim_model1(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult), ReproduceError> {
-    let t = simulate(CaseName::Model1, opts.seed, None, |_| {})?;
+    let t = simulate(CaseName::Model1, opts.seed, None, |o| o.dither_std = opts.reading.dither_std)?;
     let res = ["e1", "e2", "e3", "e4"];
     let m = analyse(&t, &["u"], &res, &matrix_options(opts.seed, opts, true))?;
     let paper = MatrixOptions { method: Method::Paper, ..matrix_options(opts.seed, opts, false) };
@@ -180,6 +259,8 @@ pub fn claim_model1(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult), Re
         ours,
         holds,
         details: serde_json::json!({"mi": mi, "ccf": ccf, "mi_raw": mi_raw, "ccf_raw": ccf_raw}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, m))
 }
@@ -215,6 +296,8 @@ pub fn claim_data_length(opts: &ReproduceOptions) -> Result<(Claim, LengthStudy)
         ours,
         holds,
         details: serde_json::json!({"std": study.iter().map(|s| s.2).collect::<Vec<_>>()}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, study))
 }
@@ -237,8 +320,8 @@ pub fn claim_excitation(opts: &ReproduceOptions) -> Result<(Claim, Vec<(String, 
                 total += lagged_profile(
                     t.column("u")?,
                     t.column(e)?,
-                    Lags { min: 1, max: 5 },
-                    &MiOptions::default(),
+                    Lags { min: 1, max: opts.reading.max_lag.unwrap_or(5) },
+                    &MiOptions::with_k(opts.reading.k),
                 )?
                 .norm();
             }
@@ -259,6 +342,8 @@ pub fn claim_excitation(opts: &ReproduceOptions) -> Result<(Claim, Vec<(String, 
         ours,
         holds: best == "uniform",
         details: serde_json::json!({"largest": best, "means": study}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, study))
 }
@@ -271,13 +356,13 @@ pub fn claim_continuous(
     let d = ["ud1", "ud2", "ud3"];
     let mo = matrix_options(opts.seed, opts, true);
     let bad = analyse(
-        &simulate(CaseName::Continuous2x3, opts.seed, Some("a=0.8"), |_| {})?,
+        &simulate(CaseName::Continuous2x3, opts.seed, Some("a=0.8"), |o| o.dither_std = opts.reading.dither_std)?,
         &d,
         &["e1", "e2"],
         &mo,
     )?;
     let good = analyse(
-        &simulate(CaseName::Continuous2x3, opts.seed, Some("none"), |_| {})?,
+        &simulate(CaseName::Continuous2x3, opts.seed, Some("none"), |o| o.dither_std = opts.reading.dither_std)?,
         &d,
         &["e1", "e2"],
         &mo,
@@ -298,6 +383,8 @@ pub fn claim_continuous(
         ours,
         holds,
         details: serde_json::json!({"mi": mi, "ccf": ccf, "mi_nominal": mi0}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, bad, good))
 }
@@ -306,7 +393,7 @@ pub fn claim_continuous(
 /// correlation misses g21 (ud2→e1).
 pub fn claim_hammerstein(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult), ReproduceError> {
     let d = ["ud1", "ud2", "ud3"];
-    let t = simulate(CaseName::Hammerstein3x3, opts.seed, Some("both"), |_| {})?;
+    let t = simulate(CaseName::Hammerstein3x3, opts.seed, Some("both"), |o| o.dither_std = opts.reading.dither_std)?;
     let m = analyse(&t, &d, &["e1", "e2", "e3"], &matrix_options(opts.seed, opts, true))?;
     let (mi, ccf) = flagged(&m);
     let both = mi.iter().any(|c| c == "ud2→e1") && mi.iter().any(|c| c == "ud3→e1");
@@ -323,6 +410,8 @@ pub fn claim_hammerstein(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult
         ours,
         holds: both && ccf_misses_g21,
         details: serde_json::json!({"mi": mi, "ccf": ccf}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, m))
 }
@@ -346,6 +435,8 @@ pub fn claim_disturbance(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult
         ours: format!("MI flags {} with the eq 30 disturbance and no plant change. Seed {}.", list(&mi), opts.seed),
         holds: mi.is_empty(),
         details: serde_json::json!({"mi": mi}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, m))
 }
@@ -399,8 +490,33 @@ pub fn claim_false_alarms(
         ours,
         holds: fraction <= 0.05 && opts.matched_seeds >= 50,
         details: serde_json::json!({"fraction": fraction, "runs": runs, "alarmed": alarms}),
+        sweep: None,
+        holds_under: None,
     };
     Ok((claim, study))
+}
+
+/// Re-runs claim `id` under every reading of [`Reading::sweep`]; `None` for a claim that has
+/// no open settings to sweep (2, 6 and 7 are studies of the estimator and of null runs).
+pub fn sweep(id: u32, opts: &ReproduceOptions) -> Result<Option<Vec<SweepPoint>>, ReproduceError> {
+    let run = |o: &ReproduceOptions| -> Result<Option<Claim>, ReproduceError> {
+        Ok(match id {
+            1 => Some(claim_model1(o)?.0),
+            3 => Some(claim_excitation(o)?.0),
+            4 => Some(claim_continuous(o)?.0),
+            5 => Some(claim_hammerstein(o)?.0),
+            _ => None,
+        })
+    };
+    let mut points = Vec::new();
+    for reading in Reading::sweep(opts.reading.method) {
+        let o = ReproduceOptions { reading, ..*opts };
+        match run(&o)? {
+            Some(c) => points.push(SweepPoint { reading, holds: c.holds, ours: c.ours }),
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(points))
 }
 
 /// Runs every claim. `progress` hears what is running.
@@ -436,5 +552,14 @@ pub fn reproduce(
     progress(&format!("claim 7: {} seeds of each matched case", opts.matched_seeds));
     let (c, matched_study) = claim_false_alarms(opts, &mut progress)?;
     claims.push(c);
+    if opts.sweep {
+        for c in claims.iter_mut().filter(|c| !c.holds) {
+            progress(&format!("claim {}: sweeping the paper's open settings", c.id));
+            if let Some(points) = sweep(c.id, opts)? {
+                c.holds_under = Some(points.iter().find(|p| p.holds).map(|p| p.reading));
+                c.sweep = Some(points);
+            }
+        }
+    }
     Ok(Reproduction { claims, matrices, length_study, excitation_study, matched_study })
 }

@@ -3,7 +3,7 @@
 //! paper (those tests pin what we measure, so a change in behaviour shows up here first).
 
 use mpmwatch::report::reproduce::{
-    ReproduceOptions, claim_continuous, claim_data_length, claim_disturbance, claim_excitation,
+    Reading, ReproduceOptions, claim_continuous, claim_data_length, claim_disturbance, claim_excitation,
     claim_false_alarms, claim_hammerstein, claim_model1,
 };
 use mpmwatch_core::detect::Method;
@@ -63,7 +63,7 @@ fn claim5_hammerstein_changed_submodels() {
 /// beyond MI at one-in-a-billion per lag.
 #[test]
 fn claim5_under_the_papers_rule_misses_g31() {
-    let (c, _) = claim_hammerstein(&ReproduceOptions { method: Method::Paper, ..opts() }).unwrap();
+    let (c, _) = claim_hammerstein(&ReproduceOptions { reading: Reading::default_for(Method::Paper), ..opts() }).unwrap();
     assert_eq!(c.details["mi"], json!(["ud2→e1"]), "{}", c.ours);
 }
 
