@@ -7,7 +7,9 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use mpmwatch_core::detect::{self, Cell, Evidence, LagChoice, MatrixOptions, MatrixResult, Method, Signal, Verdict};
+use mpmwatch_core::detect::{
+    self, Cell, Evidence, LagChoice, MatrixOptions, MatrixResult, Method, Signal, Verdict,
+};
 use mpmwatch_core::info::{Lags, MiOptions, SurrogateOptions};
 
 use super::config::ControllerConfig;

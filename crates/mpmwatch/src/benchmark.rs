@@ -144,3 +144,63 @@ pub fn run(opts: &BenchOptions, mut progress: impl FnMut(&str)) -> Result<BenchR
         seed: opts.seed,
     })
 }
+
+/// The industrial-scale timing: one default analysis of a 20×40 controller.
+#[derive(Debug, Clone, Serialize)]
+pub struct LargeReport {
+    /// MVs (dithers) and CVs (residuals).
+    pub shape: (usize, usize),
+    /// Record length.
+    pub n: usize,
+    /// Wall time of `detect::analyze` with its defaults, seconds.
+    pub seconds: f64,
+    /// Planted mismatches found, of three.
+    pub planted_found: usize,
+    /// Elements flagged that were not planted.
+    pub false_elements: usize,
+    /// Seed of the data.
+    pub seed: u64,
+}
+
+/// A 20×40 controller: binary dithers, AR(1) residuals (poles 0.3–0.9), three planted
+/// mismatches of `0.35·d(t−2) + 0.25·d(t−2)·d(t−3)` on (cv 3, mv 0), (cv 17, mv 7) and
+/// (cv 31, mv 15); lags 1–20; the default analysis.
+pub fn run_large(n: usize, seed: u64) -> Result<LargeReport, InfoError> {
+    let (mvs, cvs) = (20, 40);
+    let planted = [(3usize, 0usize), (17, 7), (31, 15)];
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let dithers: Vec<Vec<f64>> =
+        (0..mvs).map(|_| (0..n).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect()).collect();
+    let residuals: Vec<Vec<f64>> = (0..cvs)
+        .map(|j| {
+            let a = rng.random_range(0.3..0.9);
+            let mut v = ar1(&mut rng, n, a);
+            for &(cv, mv) in &planted {
+                if cv == j {
+                    let d = &dithers[mv];
+                    for t in 3..n {
+                        v[t] += 0.35 * d[t - 2] + 0.25 * d[t - 2] * d[t - 3];
+                    }
+                }
+            }
+            v
+        })
+        .collect();
+    let dn: Vec<String> = (0..mvs).map(|i| format!("d{}", i + 1)).collect();
+    let rn: Vec<String> = (0..cvs).map(|j| format!("e{}", j + 1)).collect();
+    let d: Vec<Signal> = dithers.iter().zip(&dn).map(|(v, name)| Signal { name, values: v }).collect();
+    let r: Vec<Signal> = residuals.iter().zip(&rn).map(|(v, name)| Signal { name, values: v }).collect();
+    let start = Instant::now();
+    let m = analyze(&d, &r, &MatrixOptions::default())?;
+    let seconds = start.elapsed().as_secs_f64();
+    let flagged: Vec<(usize, usize)> =
+        m.cells.iter().filter(|c| c.significant).map(|c| (c.cv, c.mv)).collect();
+    Ok(LargeReport {
+        shape: (mvs, cvs),
+        n,
+        seconds,
+        planted_found: planted.iter().filter(|p| flagged.contains(p)).count(),
+        false_elements: flagged.iter().filter(|f| !planted.contains(f)).count(),
+        seed,
+    })
+}

@@ -180,7 +180,9 @@ pub fn cases(opts: &PowerOptions) -> Vec<Case> {
             }
         }
     }
-    for (dither, count) in [(DitherKind::Binary, opts.binary_nulls), (DitherKind::Uniform, opts.uniform_nulls)] {
+    for (dither, count) in
+        [(DitherKind::Binary, opts.binary_nulls), (DitherKind::Uniform, opts.uniform_nulls)]
+    {
         for _ in 0..count {
             push(None, dither, 0.0, &mut rng);
         }
@@ -372,13 +374,20 @@ pub fn summarise(opts: &PowerOptions, out: &[Outcome]) -> PowerSummary {
             keys.push(k);
         }
     }
-    let rate = |sel: &[&Outcome], f: &dyn Fn(&Outcome) -> bool| Rate::of(sel.iter().filter(|o| f(o)).count(), sel.len());
+    let rate = |sel: &[&Outcome], f: &dyn Fn(&Outcome) -> bool| {
+        Rate::of(sel.iter().filter(|o| f(o)).count(), sel.len())
+    };
     let power = keys
         .iter()
         .map(|&(shape, dither, bits)| {
             let sel: Vec<&Outcome> = out
                 .iter()
-                .filter(|o| o.acts && o.case.shape == shape && o.case.dither == dither && o.case.size.to_bits() == bits)
+                .filter(|o| {
+                    o.acts
+                        && o.case.shape == shape
+                        && o.case.dither == dither
+                        && o.case.size.to_bits() == bits
+                })
                 .collect();
             PowerRow {
                 shape,
@@ -391,13 +400,18 @@ pub fn summarise(opts: &PowerOptions, out: &[Outcome]) -> PowerSummary {
         })
         .collect();
     let nulls: Vec<&Outcome> = out.iter().filter(|o| !o.acts).collect();
-    let mean_of = |v: Vec<usize>| if v.is_empty() { 0.0 } else { v.iter().sum::<usize>() as f64 / v.len() as f64 };
+    let mean_of =
+        |v: Vec<usize>| if v.is_empty() { 0.0 } else { v.iter().sum::<usize>() as f64 / v.len() as f64 };
     PowerSummary {
         options: opts.clone(),
         power,
         nulls: [0.05, 0.01, 0.001]
             .iter()
-            .map(|&a| NullRow { alpha: a, family: rate(&nulls, &|o| o.family_p <= a), ccf: rate(&nulls, &|o| o.ccf_at(a, lags)) })
+            .map(|&a| NullRow {
+                alpha: a,
+                family: rate(&nulls, &|o| o.family_p <= a),
+                ccf: rate(&nulls, &|o| o.ccf_at(a, lags)),
+            })
             .collect(),
         paper_nulls: rate(&nulls, &|o| o.paper),
         mean_surrogates: (
@@ -470,7 +484,9 @@ mod tests {
     fn generated_effects_have_the_asked_size_and_lag() {
         let opts = PowerOptions::default();
         let all = cases(&opts);
-        for shape in [Shape::Linear, Shape::LinearDynamic, Shape::Quadratic, Shape::DeadZone, Shape::Interaction] {
+        for shape in
+            [Shape::Linear, Shape::LinearDynamic, Shape::Quadratic, Shape::DeadZone, Shape::Interaction]
+        {
             let case = all.iter().find(|c| c.shape == shape).expect("every shape is drawn");
             let (d1, _, _) = generate(case, opts.n);
             let f = effect(case, &d1);

@@ -8,8 +8,8 @@ use serde::Serialize;
 use crate::info::correlation::{ccf, ccf_limit, family_wise_z, pearson};
 use crate::info::significance::test_prepared;
 use crate::info::{
-    FamilyOptions, FamilyTest, InfoError, LaggedPair, Lags, MiOptions, Statistic, SurrogateOptions, Threshold,
-    auto_tmax, family_test,
+    FamilyOptions, FamilyTest, InfoError, LaggedPair, Lags, MiOptions, Statistic, SurrogateOptions,
+    Threshold, auto_tmax, family_test,
 };
 
 use super::partial::partial_out;
@@ -40,7 +40,16 @@ pub enum LagChoice {
 
 /// The decision rule of an element.
 #[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize, strum::EnumString, strum::Display, strum::VariantNames,
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Serialize,
+    serde::Deserialize,
+    strum::EnumString,
+    strum::Display,
+    strum::VariantNames,
 )]
 #[serde(rename_all = "snake_case")]
 #[strum(serialize_all = "snake_case")]
@@ -173,7 +182,11 @@ impl ElementTest {
             profile: p.values.clone(),
             lag_critical: p.critical.clone(),
             norm: p.norm,
-            threshold: Threshold { mean: p.norm_mean, std: p.norm_std, critical: p.norm_mean + z * p.norm_std },
+            threshold: Threshold {
+                mean: p.norm_mean,
+                std: p.norm_std,
+                critical: p.norm_mean + z * p.norm_std,
+            },
             p_value: t.p_value,
             norm_significant: false,
             peak_lag: holds_max.then_some(t.argmax.1),
@@ -408,7 +421,11 @@ fn cell(
     let sur =
         SurrogateOptions { seed: opts.surrogates.seed + 1000 * cv as u64 + mv as u64, ..opts.surrogates };
     let pair = LaggedPair::new(d.values, r.values, lags, 1, &opts.mi)?;
-    let pair2 = if opts.joint_embedding { Some(LaggedPair::new(d.values, r.values, lags, 2, &opts.mi)?) } else { None };
+    let pair2 = if opts.joint_embedding {
+        Some(LaggedPair::new(d.values, r.values, lags, 2, &opts.mi)?)
+    } else {
+        None
+    };
     let ccf_values = ccf(d.values, r.values, lags.min as i64..=lags.max as i64)?;
     let z = family_wise_z(opts.ccf_alpha, lags.len());
     let limit = ccf_limit(d.values.len(), z);
@@ -426,7 +443,10 @@ fn cell(
         Method::Paper => {
             let pairwise = ElementTest::from(test_prepared(&pair, &sur)?);
             let joint = match &pair2 {
-                Some(p2) => Some(ElementTest::from(test_prepared(p2, &SurrogateOptions { seed: sur.seed ^ 0x5eed, ..sur })?)),
+                Some(p2) => Some(ElementTest::from(test_prepared(
+                    p2,
+                    &SurrogateOptions { seed: sur.seed ^ 0x5eed, ..sur },
+                )?)),
                 None => None,
             };
             let decision = paper_decision(&pairwise, joint.as_ref());
@@ -436,7 +456,8 @@ fn cell(
             let fo = FamilyOptions { alpha: opts.alpha, surrogates: sur, ..FamilyOptions::default() };
             let t = family_test(&pair, pair2.as_ref(), &fo)?;
             let pairwise = ElementTest::from_family(&t, Statistic::Mi, opts.surrogates.z);
-            let joint = pair2.is_some().then(|| ElementTest::from_family(&t, Statistic::JointMi, opts.surrogates.z));
+            let joint =
+                pair2.is_some().then(|| ElementTest::from_family(&t, Statistic::JointMi, opts.surrogates.z));
             let decision = family_decision(&t);
             (pairwise, joint, Some(t), decision)
         }
@@ -475,7 +496,13 @@ fn paper_decision(pairwise: &ElementTest, joint: Option<&ElementTest>) -> Decisi
             ..base
         }
     } else if let Some(j) = joint.filter(|j| j.significant) {
-        Decision { evidence: Evidence::JointMi, value: j.norm, critical: j.threshold.critical, p_value: j.p_value, ..base }
+        Decision {
+            evidence: Evidence::JointMi,
+            value: j.norm,
+            critical: j.threshold.critical,
+            p_value: j.p_value,
+            ..base
+        }
     } else {
         base
     }
@@ -483,7 +510,8 @@ fn paper_decision(pairwise: &ElementTest, joint: Option<&ElementTest>) -> Decisi
 
 fn family_decision(t: &FamilyTest) -> Decision {
     let (statistic, lag) = t.argmax;
-    let profile = t.profiles.iter().find(|p| p.statistic == statistic).expect("the argmax names a tested statistic");
+    let profile =
+        t.profiles.iter().find(|p| p.statistic == statistic).expect("the argmax names a tested statistic");
     let k = t.lags.iter().position(|&l| l == lag).expect("the argmax lag is in the range");
     let evidence = match statistic {
         Statistic::Mi => Evidence::LagMi,

@@ -9,7 +9,8 @@ mod verdict;
 mod whiten;
 
 pub use matrix::{
-    CcfBaseline, Cell, Decision, ElementTest, Evidence, LagChoice, MatrixOptions, MatrixResult, Method, Signal, analyze,
+    CcfBaseline, Cell, Decision, ElementTest, Evidence, LagChoice, MatrixOptions, MatrixResult, Method,
+    Signal, analyze,
 };
 pub use partial::partial_out;
 pub use verdict::{Channel, Verdict, localise};

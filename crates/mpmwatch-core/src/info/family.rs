@@ -98,19 +98,31 @@ impl FamilyOptions {
     pub fn check(&self) -> Result<(), InfoError> {
         let bad = |name, value: String, reason| Err(InfoError::InvalidParameter { name, value, reason });
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
-            return bad("alpha", self.alpha.to_string(), "must be between 0 and 0.5 (0.01 is a common choice)");
+            return bad(
+                "alpha",
+                self.alpha.to_string(),
+                "must be between 0 and 0.5 (0.01 is a common choice)",
+            );
         }
         if !(self.linear_share > 0.0 && self.linear_share < 1.0) {
             return bad("linear_share", self.linear_share.to_string(), "must be strictly between 0 and 1");
         }
         if self.calibration < 10 {
-            return bad("calibration", self.calibration.to_string(), "at least 10 surrogates are needed to standardise");
+            return bad(
+                "calibration",
+                self.calibration.to_string(),
+                "at least 10 surrogates are needed to standardise",
+            );
         }
         if self.exceedances < 1 {
             return bad("exceedances", self.exceedances.to_string(), "must be at least 1");
         }
         if self.surrogates.count < 20 {
-            return bad("surrogates", self.surrogates.count.to_string(), "at least 20 are needed for the tail model");
+            return bad(
+                "surrogates",
+                self.surrogates.count.to_string(),
+                "at least 20 are needed for the tail model",
+            );
         }
         Ok(())
     }
@@ -215,7 +227,12 @@ pub fn mi_offset(alpha: f64, linear_share: f64, ccf_tests: usize, mi_tests: usiz
 }
 
 /// The statistics of one (surrogate) dither, concatenated: pairwise MI, joint MI, CCF.
-fn statistics(pair: &LaggedPair<'_>, joint: Option<&LaggedPair<'_>>, x: Option<&[f64]>, shift: usize) -> Vec<f64> {
+fn statistics(
+    pair: &LaggedPair<'_>,
+    joint: Option<&LaggedPair<'_>>,
+    x: Option<&[f64]>,
+    shift: usize,
+) -> Vec<f64> {
     let mut v = match x {
         Some(xs) => pair.profile_with_x(xs),
         None => pair.profile_shifted(shift),
@@ -317,7 +334,10 @@ pub fn family_test(
             stopped_null = true;
             break;
         }
-        if exceed == 0 && null_max.len() >= TAIL_MIN && Gumbel::fit(&null_max).survival(max_z) < opts.alpha / 10.0 {
+        if exceed == 0
+            && null_max.len() >= TAIL_MIN
+            && Gumbel::fit(&null_max).survival(max_z) < opts.alpha / 10.0
+        {
             break;
         }
     }
@@ -345,8 +365,9 @@ pub fn family_test(
             let r = s * n_lags..(s + 1) * n_lags;
             let norms: Vec<f64> = calibration.iter().map(|c| crate::numerics::mean(&c[r.clone()])).collect();
             let norm_mean = crate::numerics::mean(&norms);
-            let norm_std =
-                (norms.iter().map(|v| (v - norm_mean).powi(2)).sum::<f64>() / (norms.len() as f64 - 1.0)).sqrt();
+            let norm_std = (norms.iter().map(|v| (v - norm_mean).powi(2)).sum::<f64>()
+                / (norms.len() as f64 - 1.0))
+                .sqrt();
             StatisticProfile {
                 statistic,
                 norm: crate::numerics::mean(&observed[r.clone()]),
@@ -418,7 +439,10 @@ mod tests {
     }
 
     fn opts(seed: u64) -> FamilyOptions {
-        FamilyOptions { surrogates: SurrogateOptions { seed, ..SurrogateOptions::default() }, ..Default::default() }
+        FamilyOptions {
+            surrogates: SurrogateOptions { seed, ..SurrogateOptions::default() },
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -444,7 +468,8 @@ mod tests {
         let n = 1024;
         let d = prbs(2, n);
         let e = noise(2, n);
-        let y: Vec<f64> = (0..n).map(|t| e[t] * 0.3 + if t >= 3 { 0.3 * d[t - 2] * d[t - 3] } else { 0.0 }).collect();
+        let y: Vec<f64> =
+            (0..n).map(|t| e[t] * 0.3 + if t >= 3 { 0.3 * d[t - 2] * d[t - 3] } else { 0.0 }).collect();
         let lags = Lags::new(1, 10).unwrap();
         let mi = MiOptions::default();
         let pair = LaggedPair::new(&d, &y, lags, 1, &mi).unwrap();

@@ -22,6 +22,10 @@ pub struct Args {
     /// draws its data from seed `seed·1000000 + c`. Takes about half an hour on 2 cores.
     #[arg(long)]
     power: Option<std::path::PathBuf>,
+    /// Instead of the timings, time one default analysis of a 20×40 controller (binary
+    /// dithers, three planted mismatches, lags 1–20). Takes minutes.
+    #[arg(long)]
+    large: bool,
     /// Scale the study's case counts (0.25 for a quick look; the documented run uses 1).
     #[arg(long, default_value_t = 1.0)]
     power_scale: f64,
@@ -30,6 +34,23 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(dir) = &args.power {
         return power(dir, args.seed, args.power_scale);
+    }
+    if args.large {
+        eprintln!("analysing a 20x40 controller, N = {}, seed {} (the default rule)...", args.n, args.seed);
+        let r = benchmark::run_large(args.n, args.seed)?;
+        if args.json {
+            println!("{}", serde_json::to_string(&r)?);
+        } else {
+            println!(
+                "20x40 default analysis, N = {}: {:.1} s on {} threads; planted found {}/3, other elements flagged {}",
+                r.n,
+                r.seconds,
+                rayon::current_num_threads(),
+                r.planted_found,
+                r.false_elements
+            );
+        }
+        return Ok(());
     }
     anyhow::ensure!(args.n >= 512, "--n must be at least 512 for a 20-lag matrix (got {})", args.n);
     let opts = BenchOptions { n: args.n, reps: args.reps, seed: args.seed };
@@ -94,7 +115,11 @@ fn power(dir: &std::path::Path, seed: u64, scale: f64) -> anyhow::Result<()> {
             points: rows.iter().map(|r| (r.size, 100.0 * f(r).value())).collect(),
             error: Some(rows.iter().map(|r| 50.0 * (f(r).high - f(r).low)).collect()),
         };
-        let name = format!("{}_{}", serde_json::to_value(shape)?.as_str().unwrap_or("shape"), serde_json::to_value(dither)?.as_str().unwrap_or("dither"));
+        let name = format!(
+            "{}_{}",
+            serde_json::to_value(shape)?.as_str().unwrap_or("shape"),
+            serde_json::to_value(dither)?.as_str().unwrap_or("dither")
+        );
         write_xy_chart(
             dir,
             &name,

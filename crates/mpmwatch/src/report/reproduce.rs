@@ -95,7 +95,12 @@ impl Reading {
     pub fn sweep(method: Method) -> Vec<Self> {
         let d = Self::default_for(method);
         vec![
-            Self { label: "the paper's recipe: 6σ rule, raw residuals", method: Method::Paper, whiten: false, ..d },
+            Self {
+                label: "the paper's recipe: 6σ rule, raw residuals",
+                method: Method::Paper,
+                whiten: false,
+                ..d
+            },
             Self { label: "6σ rule, whitened residuals", method: Method::Paper, ..d },
             Self { label: "raw residuals", whiten: false, ..d },
             Self { label: "k = 3", k: 3, ..d },
@@ -187,7 +192,12 @@ fn matrix_options(seed: u64, opts: &ReproduceOptions, whiten: bool) -> MatrixOpt
         alpha: opts.alpha,
         lags: LagChoice::Fixed(Lags { min: 1, max: r.max_lag.unwrap_or(20) }),
         mi: MiOptions::with_k(r.k),
-        surrogates: SurrogateOptions { count: opts.surrogates, seed, method: r.surrogates, ..SurrogateOptions::default() },
+        surrogates: SurrogateOptions {
+            count: opts.surrogates,
+            seed,
+            method: r.surrogates,
+            ..SurrogateOptions::default()
+        },
         whiten: (whiten && r.whiten).then_some(10),
         ..MatrixOptions::default()
     }
@@ -356,13 +366,17 @@ pub fn claim_continuous(
     let d = ["ud1", "ud2", "ud3"];
     let mo = matrix_options(opts.seed, opts, true);
     let bad = analyse(
-        &simulate(CaseName::Continuous2x3, opts.seed, Some("a=0.8"), |o| o.dither_std = opts.reading.dither_std)?,
+        &simulate(CaseName::Continuous2x3, opts.seed, Some("a=0.8"), |o| {
+            o.dither_std = opts.reading.dither_std
+        })?,
         &d,
         &["e1", "e2"],
         &mo,
     )?;
     let good = analyse(
-        &simulate(CaseName::Continuous2x3, opts.seed, Some("none"), |o| o.dither_std = opts.reading.dither_std)?,
+        &simulate(CaseName::Continuous2x3, opts.seed, Some("none"), |o| {
+            o.dither_std = opts.reading.dither_std
+        })?,
         &d,
         &["e1", "e2"],
         &mo,
@@ -393,7 +407,9 @@ pub fn claim_continuous(
 /// correlation misses g21 (ud2→e1).
 pub fn claim_hammerstein(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult), ReproduceError> {
     let d = ["ud1", "ud2", "ud3"];
-    let t = simulate(CaseName::Hammerstein3x3, opts.seed, Some("both"), |o| o.dither_std = opts.reading.dither_std)?;
+    let t = simulate(CaseName::Hammerstein3x3, opts.seed, Some("both"), |o| {
+        o.dither_std = opts.reading.dither_std
+    })?;
     let m = analyse(&t, &d, &["e1", "e2", "e3"], &matrix_options(opts.seed, opts, true))?;
     let (mi, ccf) = flagged(&m);
     let both = mi.iter().any(|c| c == "ud2→e1") && mi.iter().any(|c| c == "ud3→e1");
@@ -422,12 +438,7 @@ pub fn claim_disturbance(opts: &ReproduceOptions) -> Result<(Claim, MatrixResult
     let t = simulate(CaseName::Hammerstein3x3, opts.seed, Some("none"), |o| {
         o.disturbance = Disturbance::Changed
     })?;
-    let m = analyse(
-        &t,
-        &["ud1", "ud2", "ud3"],
-        &["e1", "e2", "e3"],
-        &matrix_options(opts.seed, opts, true),
-    )?;
+    let m = analyse(&t, &["ud1", "ud2", "ud3"], &["e1", "e2", "e3"], &matrix_options(opts.seed, opts, true))?;
     let (mi, _) = flagged(&m);
     let claim = Claim {
         id: 6,

@@ -63,7 +63,9 @@ fn claim5_hammerstein_changed_submodels() {
 /// beyond MI at one-in-a-billion per lag.
 #[test]
 fn claim5_under_the_papers_rule_misses_g31() {
-    let (c, _) = claim_hammerstein(&ReproduceOptions { reading: Reading::default_for(Method::Paper), ..opts() }).unwrap();
+    let (c, _) =
+        claim_hammerstein(&ReproduceOptions { reading: Reading::default_for(Method::Paper), ..opts() })
+            .unwrap();
     assert_eq!(c.details["mi"], json!(["ud2→e1"]), "{}", c.ours);
 }
 

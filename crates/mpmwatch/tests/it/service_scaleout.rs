@@ -18,7 +18,9 @@ const CONTROLLERS: usize = 4;
 fn instance(http: u16, share: &LoadgenOptions) -> String {
     format!(
         "[zenoh]\nmode = \"client\"\nconnect = [\"tcp/127.0.0.1:{ROUTER}\"]\n[http]\nbind = \"127.0.0.1:{http}\"\n\n{}",
-        share.controller_toml("window = 512\nmin_samples = 200\nlag_max = 3\nsurrogates = 10\nmethod = \"paper\"\nevery = 3600")
+        share.controller_toml(
+            "window = 512\nmin_samples = 200\nlag_max = 3\nsurrogates = 10\nmethod = \"paper\"\nevery = 3600"
+        )
     )
 }
 
