@@ -340,7 +340,9 @@ pub fn claim_excitation(opts: &ReproduceOptions) -> Result<(Claim, Vec<(String, 
     }
     let best = study.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|b| b.0.clone()).unwrap_or_default();
     let ours = format!(
-        "Summed norm of MI (ε2–ε4, lags 1–5, mean of {} seeds): {}. Largest: {best}.",
+        "Summed norm of MI (ε2–ε4, lags 1–{}, k = {}, mean of {} seeds): {}. Largest: {best}.",
+        opts.reading.max_lag.unwrap_or(5),
+        opts.reading.k,
         opts.excitation_seeds,
         study.iter().map(|(n, v)| format!("{n} {v:.4} nats")).collect::<Vec<_>>().join(", ")
     );

@@ -4,7 +4,7 @@
 
 use mpmwatch::report::reproduce::{
     Reading, ReproduceOptions, claim_continuous, claim_data_length, claim_disturbance, claim_excitation,
-    claim_false_alarms, claim_hammerstein, claim_model1,
+    claim_false_alarms, claim_hammerstein, claim_model1, sweep,
 };
 use mpmwatch_core::detect::Method;
 use serde_json::json;
@@ -67,6 +67,17 @@ fn claim5_under_the_papers_rule_misses_g31() {
         claim_hammerstein(&ReproduceOptions { reading: Reading::default_for(Method::Paper), ..opts() })
             .unwrap();
     assert_eq!(c.details["mi"], json!(["ud2→e1"]), "{}", c.ours);
+}
+
+/// No reading of the open settings makes claim 5 hold: under every one, the CCF sees g21.
+#[test]
+fn claim5_sweep_finds_no_reading_under_which_it_holds() {
+    let points = sweep(5, &opts()).unwrap().expect("claim 5 has settings to sweep");
+    assert_eq!(points.len(), Reading::sweep(Method::Family).len());
+    for p in &points {
+        assert!(!p.holds, "{}: {}", p.reading.label, p.ours);
+        assert!(p.ours.contains("the CCF flags ud2→e1"), "{}: {}", p.reading.label, p.ours);
+    }
 }
 
 #[test]
