@@ -149,15 +149,19 @@ async fn demo(args: Args, cfg: Config) -> anyhow::Result<()> {
                 .and_then(|g| *g)
                 .map(|t| format!(", {:.0} s after the switch", t.elapsed().as_secs_f64()));
             let event = v["event"].as_str().unwrap_or("?");
+            let statistic = v["statistic"].as_str().unwrap_or("?");
+            // The correlation's value is |r|; every other statistic is MI in bits.
+            let unit = if statistic == "ccf" { "" } else { " bits" };
             println!(
-                "[{:>5.1} s] ALARM {} on {}: {} {:.4} bits {} critical {:.4} bits, verdict {}{}",
+                "[{:>5.1} s] ALARM {} on {}: {} {:.4}{unit} {} critical {:.4}{unit}, p = {:.1e}, verdict {}{}",
                 started.elapsed().as_secs_f64(),
                 event.to_uppercase(),
                 v["channel"].as_str().unwrap_or("?"),
-                v["statistic"].as_str().unwrap_or("?"),
+                statistic,
                 v["value_bits"].as_f64().unwrap_or(f64::NAN),
                 if event == "raise" { ">" } else { "vs" },
                 v["critical_bits"].as_f64().unwrap_or(f64::NAN),
+                v["p_value"].as_f64().unwrap_or(f64::NAN),
                 v["verdict"].as_str().unwrap_or("?"),
                 since.unwrap_or_default()
             );
