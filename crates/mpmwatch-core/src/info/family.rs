@@ -55,8 +55,6 @@ pub enum Statistic {
 pub enum PValueSource {
     /// `h / l`: stopped after h null maxima reached the observed one (Besag–Clifford).
     Sequential,
-    /// `(1 + e) / (l + 1)` over all surrogates drawn.
-    Empirical,
     /// The Gumbel tail fitted to the null maxima (few exceedances).
     GumbelTail,
 }
@@ -343,10 +341,10 @@ pub fn family_test(
     }
     let gumbel = Gumbel::fit(&null_max);
     let l = null_max.len();
+    // Every element ends either clearly null (h exceedances) or with fewer than h, where the
+    // tail model is the finer estimate.
     let (p_value, p_source) = if stopped_null {
         (exceed as f64 / l as f64, PValueSource::Sequential)
-    } else if exceed >= opts.exceedances {
-        ((1 + exceed) as f64 / (l + 1) as f64, PValueSource::Empirical)
     } else {
         (gumbel.survival(max_z), PValueSource::GumbelTail)
     };
