@@ -238,7 +238,7 @@ pub fn effect(case: &Case, d1: &[f64]) -> Vec<f64> {
         Shape::Interaction => (0..n).map(|t| at(t, l) * at(t, l + 1)).collect(),
     };
     let m = mpmwatch_core::numerics::mean(&f);
-    let sd = (f.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n as f64).sqrt();
+    let sd = mpmwatch_core::numerics::std_dev(&f, 0);
     if sd > 0.0 {
         f.iter_mut().for_each(|x| *x = case.size * (*x - m) / sd);
     }
@@ -490,8 +490,7 @@ mod tests {
             let case = all.iter().find(|c| c.shape == shape).expect("every shape is drawn");
             let (d1, _, _) = generate(case, opts.n);
             let f = effect(case, &d1);
-            let m = mpmwatch_core::numerics::mean(&f);
-            let sd = (f.iter().map(|x| (x - m).powi(2)).sum::<f64>() / f.len() as f64).sqrt();
+            let sd = mpmwatch_core::numerics::std_dev(&f, 0);
             assert!((sd - case.size).abs() < 1e-9 * case.size, "{shape:?}: sd {sd}");
             // Nothing acts before the effect's lag: f(t) is its mean there.
             assert!(f[..case.lag].iter().all(|x| (x - f[0]).abs() < 1e-12), "{shape:?}");

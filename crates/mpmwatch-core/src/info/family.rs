@@ -193,8 +193,8 @@ impl Gumbel {
 
     fn fit(sample: &[f64]) -> Self {
         let m = crate::numerics::mean(sample);
-        let var = sample.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (sample.len() as f64 - 1.0);
-        let scale = (var.sqrt() * 6f64.sqrt() / std::f64::consts::PI).max(f64::MIN_POSITIVE);
+        let scale =
+            (crate::numerics::std_dev(sample, 1) * 6f64.sqrt() / std::f64::consts::PI).max(f64::MIN_POSITIVE);
         Self { location: m - Self::EULER_GAMMA * scale, scale }
     }
 
@@ -300,7 +300,7 @@ pub fn family_test(
     for d in 0..dims {
         let col: Vec<f64> = calibration.iter().map(|s| s[d]).collect();
         mean[d] = crate::numerics::mean(&col);
-        std[d] = (col.iter().map(|v| (v - mean[d]).powi(2)).sum::<f64>() / (col.len() as f64 - 1.0)).sqrt();
+        std[d] = crate::numerics::std_dev(&col, 1);
     }
     let offset = mi_offset(opts.alpha, opts.linear_share, n_lags, ccf_from);
     let standardised = |s: &[f64], d: usize| -> f64 {
@@ -363,9 +363,7 @@ pub fn family_test(
             let r = s * n_lags..(s + 1) * n_lags;
             let norms: Vec<f64> = calibration.iter().map(|c| crate::numerics::mean(&c[r.clone()])).collect();
             let norm_mean = crate::numerics::mean(&norms);
-            let norm_std = (norms.iter().map(|v| (v - norm_mean).powi(2)).sum::<f64>()
-                / (norms.len() as f64 - 1.0))
-                .sqrt();
+            let norm_std = crate::numerics::std_dev(&norms, 1);
             StatisticProfile {
                 statistic,
                 norm: crate::numerics::mean(&observed[r.clone()]),

@@ -7,4 +7,4 @@ mod lstsq;
 mod stats;
 
 pub use lstsq::{Projector, instrumental, least_squares, least_squares_rows, r_squared};
-pub use stats::{lagged, mean, median, minus_mean, minus_median, quantile, rms};
+pub use stats::{lagged, mean, median, minus_mean, minus_median, quantile, rms, std_dev};

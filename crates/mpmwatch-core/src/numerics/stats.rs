@@ -27,6 +27,16 @@ pub fn quantile(x: &[f64], q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize]
 }
 
+/// Standard deviation with `ddof` degrees of freedom removed from the count (0: the
+/// population form, 1: the sample form); 0 when `len ≤ ddof`.
+pub fn std_dev(x: &[f64], ddof: usize) -> f64 {
+    if x.len() <= ddof {
+        return 0.0;
+    }
+    let m = mean(x);
+    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() - ddof) as f64).sqrt()
+}
+
 /// Root mean square about zero; 0 for an empty series.
 pub fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
@@ -53,6 +63,15 @@ pub fn lagged(x: &[f64], d: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn std_dev_of_a_known_series() {
+        // 2, 4, 4, 4, 5, 5, 7, 9: mean 5, squared deviations sum to 32.
+        let x = [2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0];
+        assert!((std_dev(&x, 0) - 2.0).abs() < 1e-15);
+        assert!((std_dev(&x, 1) - (32.0f64 / 7.0).sqrt()).abs() < 1e-15);
+        assert_eq!(std_dev(&[3.0], 1), 0.0);
+    }
 
     #[test]
     fn closed_forms() {
