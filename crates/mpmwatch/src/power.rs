@@ -269,7 +269,7 @@ pub fn run_case(case: &Case, opts: &PowerOptions) -> Result<[Outcome; 2], InfoEr
             family_surrogates: c.family.as_ref().map_or(0, |f| f.surrogates),
             paper: paper.cell(mv, 0).is_some_and(|c| c.significant),
             ccf_max,
-            ccf_n: ((c.ccf.z / c.ccf.limit).powi(2)).round() as usize,
+            ccf_n: c.ccf.n,
         }
     };
     Ok([outcome(0), outcome(1)])

@@ -208,6 +208,8 @@ pub struct CcfBaseline {
     pub limit: f64,
     /// The z of that limit.
     pub z: f64,
+    /// Samples behind the CCF (after partialling out and whitening trimmed the start).
+    pub n: usize,
     /// Any |CCF| above the limit.
     pub significant: bool,
     /// Pearson r at lag 0.
@@ -436,6 +438,7 @@ fn cell(
         values: ccf_values,
         limit,
         z,
+        n: d.values.len(),
         pearson_r: p.r,
         pearson_limit: p.limit,
     };

@@ -104,6 +104,9 @@ pub struct LaggedPair<'a> {
     k: usize,
     n_pairs: usize,
     path: Path,
+    /// Mean and population spread of x and of y, for the correlation profile (a circular shift
+    /// or an iAAFT surrogate of x keeps x's values, hence both).
+    moments: [(f64, f64); 2],
 }
 
 impl<'a> LaggedPair<'a> {
@@ -148,7 +151,8 @@ impl<'a> LaggedPair<'a> {
         let continuous = matches!(path, Path::Continuous);
         let y = scaled(y, continuous && opts.standardize);
         let x_scale = if continuous && opts.standardize { robust_std(x).unwrap_or(1.0) } else { 1.0 };
-        Ok(Self { x, y, x_scale, lags, width, k: opts.k, n_pairs, path })
+        let moments = [x, &y[..]].map(|v| (crate::numerics::mean(v), crate::numerics::std_dev(v, 0)));
+        Ok(Self { x, y, x_scale, lags, width, k: opts.k, n_pairs, path, moments })
     }
 
     /// The dither series.
@@ -237,11 +241,7 @@ impl<'a> LaggedPair<'a> {
     }
 
     fn correlations(&self, x_at: impl Fn(usize) -> f64) -> Vec<f64> {
-        let n = self.x.len();
-        let mx = crate::numerics::mean(self.x);
-        let sx = (self.x.iter().map(|v| (v - mx).powi(2)).sum::<f64>() / n as f64).sqrt();
-        let my = crate::numerics::mean(&self.y);
-        let sy = (self.y.iter().map(|v| (v - my).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let [(mx, sx), (my, sy)] = self.moments;
         let t0 = self.width - 1;
         let np = self.n_pairs;
         let xc: Vec<f64> = (t0..t0 + np).map(|t| x_at(t) - mx).collect();
