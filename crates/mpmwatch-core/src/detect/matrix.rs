@@ -12,7 +12,7 @@ use crate::info::{
     Threshold, auto_tmax, family_test,
 };
 
-use super::partial::partial_out;
+use super::partial::PartialPlan;
 use super::verdict::{Channel, localise};
 use super::whiten::ArWhitener;
 
@@ -370,19 +370,29 @@ pub fn analyze(
         .flat_map(|j| (0..dithers.len()).map(move |i| (j, i)))
         .filter(|&(_, i)| excited[i])
         .collect();
+    let several = excited.iter().filter(|&&e| e).count() > 1;
+    let dither_values: Vec<&[f64]> = dithers.iter().map(|d| d.values).collect();
+    let cut_of = |j: usize| if opts.partial_out && several { lags[j].max } else { 0 };
+    let mut cuts: Vec<usize> = (0..residuals.len()).map(cut_of).filter(|&c| c > 0).collect();
+    cuts.sort_unstable();
+    cuts.dedup();
+    let plans: Vec<(usize, PartialPlan)> =
+        cuts.par_iter().map(|&c| (c, PartialPlan::new(&dither_values, &excited, c))).collect();
+    let plan_of = |cut: usize| plans.iter().find(|(c, _)| *c == cut).map(|(_, p)| p);
+    let fits: Vec<Option<Vec<f64>>> = (0..residuals.len())
+        .into_par_iter()
+        .map(|j| plan_of(cut_of(j)).and_then(|p| p.fit(residuals[j].values)))
+        .collect();
     let cells = pairs
         .par_iter()
         .map(|&(j, i)| {
             // Partial out the other dithers, then whiten what is left with an AR model fitted
             // to it (the per-residual whitener is reported; the per-element refit differs only
             // by the removed dither-driven part).
-            let others: Vec<&[f64]> =
-                (0..dithers.len()).filter(|&k| k != i && excited[k]).map(|k| dithers[k].values).collect();
-            let cut = if opts.partial_out && !others.is_empty() { lags[j].max } else { 0 };
-            let cleaned = if cut > 0 {
-                partial_out(residuals[j].values, &others, cut)
-            } else {
-                residuals[j].values.to_vec()
+            let cut = cut_of(j);
+            let cleaned = match plan_of(cut) {
+                Some(plan) => plan.partial_out(residuals[j].values, fits[j].as_deref(), i),
+                None => residuals[j].values.to_vec(),
             };
             let w = match opts.whiten {
                 Some(max) => ArWhitener::fit(&cleaned, max),

@@ -12,7 +12,7 @@
 //! and m_i counts samples at distance 0.
 
 use super::digamma::digamma;
-use super::marginal::{count_strictly_within, count_within, kth_neighbour_distance};
+use super::marginal::{count_strictly_within_at, count_within, kth_neighbour_distance};
 
 /// The distinct levels of a discrete series and each sample's level index.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,36 +54,50 @@ impl Levels {
 /// Taking sorted input lets the lagged profile and circular-shift surrogates sort the residual
 /// once and only relabel it, instead of sorting at every lag and every surrogate.
 pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k: usize) -> f64 {
-    let mut class_vals: Vec<Vec<f64>> = vec![Vec::new(); n_classes];
-    for (&v, &l) in y_sorted.iter().zip(labels) {
-        class_vals[l as usize].push(v);
+    let mut counts = vec![0usize; n_classes];
+    for &l in labels {
+        counts[l as usize] += 1;
     }
-    let has_singleton = class_vals.iter().any(|c| c.len() == 1);
-    let reduced: Vec<f64>;
-    let all: &[f64] = if has_singleton {
-        reduced = y_sorted
-            .iter()
-            .zip(labels)
-            .filter(|&(_, &l)| class_vals[l as usize].len() > 1)
-            .map(|(&v, _)| v)
-            .collect();
-        &reduced
-    } else {
-        y_sorted
-    };
-
+    if counts.contains(&1) {
+        // Singleton classes have no in-class neighbour and leave the sample altogether.
+        let (ys, ls): (Vec<f64>, Vec<u16>) =
+            y_sorted.iter().zip(labels).filter(|&(_, &l)| counts[l as usize] > 1).map(|(&v, &l)| (v, l)).unzip();
+        return ross_sorted(&ys, &ls, n_classes, k);
+    }
+    // Each class's samples, by their position in the whole sorted sample (a counting sort,
+    // so positions stay ascending within a class): the k-th in-class neighbour is found by
+    // walking the class's values, and the count within its radius by galloping from the
+    // sample's own position in the whole, where the count is small.
+    let mut offset = vec![0usize; n_classes + 1];
+    for c in 0..n_classes {
+        offset[c + 1] = offset[c] + counts[c];
+    }
+    let mut fill = offset.clone();
+    let mut position = vec![0u32; y_sorted.len()];
+    let mut values = vec![0.0; y_sorted.len()];
+    for (p, (&v, &l)) in y_sorted.iter().zip(labels).enumerate() {
+        let slot = &mut fill[l as usize];
+        position[*slot] = p as u32;
+        values[*slot] = v;
+        *slot += 1;
+    }
     let mut acc = 0.0;
     let mut used = 0usize;
-    for vals in class_vals.iter().filter(|c| c.len() > 1) {
-        let n_c = vals.len();
+    for c in 0..n_classes {
+        let range = offset[c]..offset[c + 1];
+        let n_c = range.len();
+        if n_c < 2 {
+            continue;
+        }
+        let vals = &values[range.clone()];
         let k_c = k.min(n_c - 1);
         let psi_nc = digamma(n_c);
-        for (p, &c) in vals.iter().enumerate() {
+        for (p, &centre) in vals.iter().enumerate() {
             let r = kth_neighbour_distance(vals, p, k_c);
             let (k_i, m_i) = if r > 0.0 {
-                (k_c, count_strictly_within(all, c, r))
+                (k_c, count_strictly_within_at(y_sorted, position[range.start + p] as usize, r))
             } else {
-                (count_within(vals, c, 0.0) - 1, count_within(all, c, 0.0))
+                (count_within(vals, centre, 0.0) - 1, count_within(y_sorted, centre, 0.0))
             };
             acc += digamma(k_i) - psi_nc - digamma(m_i);
         }

@@ -29,27 +29,7 @@ impl SortedMarginal {
     /// galloping outwards from its sorted position: O(log count) rather than O(log N), which
     /// matters because KSG's counts are small.
     pub fn count_strictly_within_sample(&self, i: usize, r: f64) -> usize {
-        let p = self.position[i] as usize;
-        let s = &self.sorted;
-        let c = s[p];
-        // Last index (≥ p) with v − c < r, and first index (≤ p) with c − v < r.
-        let mut step = 1;
-        let mut hi = p;
-        while hi + step < s.len() && s[hi + step] - c < r {
-            hi += step;
-            step *= 2;
-        }
-        let end = (hi + step + 1).min(s.len());
-        let hi = hi + s[hi..end].partition_point(|&v| v - c < r);
-        let mut step = 1;
-        let mut lo = p;
-        while lo >= step && c - s[lo - step] < r {
-            lo -= step;
-            step *= 2;
-        }
-        let start = lo.saturating_sub(step);
-        let lo = start + s[start..lo].partition_point(|&v| c - v >= r);
-        hi - lo
+        count_strictly_within_at(&self.sorted, self.position[i] as usize, r)
     }
 
     /// The sorted values.
@@ -63,15 +43,28 @@ impl SortedMarginal {
     }
 }
 
-/// Number of samples `v` of the sorted slice with `|v − c| < r`, the centre itself included
-/// when it is a sample.
-///
-/// The distances are compared as `c − v` and `v − c`, the same floating-point expressions a
-/// neighbour search computes, so a neighbour found at exactly distance `r` is excluded.
-pub fn count_strictly_within(sorted: &[f64], c: f64, r: f64) -> usize {
-    let lo = sorted.partition_point(|&v| c - v >= r);
-    let hi = sorted.partition_point(|&v| v - c < r);
-    hi.saturating_sub(lo)
+/// Number of elements of the sorted slice strictly within `r` of the element at position `p`
+/// (itself included), galloping outwards from `p`: O(log count) rather than O(log N).
+pub fn count_strictly_within_at(s: &[f64], p: usize, r: f64) -> usize {
+    let c = s[p];
+    // Last index (≥ p) with v − c < r, and first index (≤ p) with c − v < r.
+    let mut step = 1;
+    let mut hi = p;
+    while hi + step < s.len() && s[hi + step] - c < r {
+        hi += step;
+        step *= 2;
+    }
+    let end = (hi + step + 1).min(s.len());
+    let hi = hi + s[hi..end].partition_point(|&v| v - c < r);
+    let mut step = 1;
+    let mut lo = p;
+    while lo >= step && c - s[lo - step] < r {
+        lo -= step;
+        step *= 2;
+    }
+    let start = lo.saturating_sub(step);
+    let lo = start + s[start..lo].partition_point(|&v| c - v >= r);
+    hi - lo
 }
 
 /// [`SortedMarginal::count_within`] on a borrowed sorted slice.
@@ -121,13 +114,9 @@ mod tests {
     fn counts_match_brute_force_with_ties() {
         let v = [0.0, 0.5, 0.5, 0.5, 1.0, 1.5, 2.0, 2.0, 3.0];
         let m = SortedMarginal::new(&v);
-        for &c in &v {
+        for (i, &c) in v.iter().enumerate() {
             for r in [0.0, 0.25, 0.5, 1.0, 1.5, 10.0] {
-                assert_eq!(
-                    count_strictly_within(&m.sorted, c, r),
-                    brute_count(&v, c, r, true),
-                    "c={c} r={r}"
-                );
+                assert_eq!(m.count_strictly_within_sample(i, r), brute_count(&v, c, r, true), "c={c} r={r}");
                 assert_eq!(m.count_within(c, r), brute_count(&v, c, r, false), "c={c} r={r}");
             }
         }

@@ -6,5 +6,5 @@
 mod lstsq;
 mod stats;
 
-pub use lstsq::{Projector, instrumental, least_squares, least_squares_rows, r_squared};
+pub use lstsq::{BlockLeastSquares, Projector, instrumental, least_squares, least_squares_rows, r_squared};
 pub use stats::{lagged, mean, median, minus_mean, minus_median, quantile, rms, std_dev};
