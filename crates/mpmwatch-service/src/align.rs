@@ -1,22 +1,31 @@
 //! Alignment of asynchronous tag samples onto a controller's sample grid, and the residual of
-//! each aligned row. Pure state machines: the ingest loop feeds them, tests drive them directly.
+//! each aligned row. Pure state machines: the ingest loop feeds them (with the wall clock as an
+//! argument), tests drive them directly.
 //!
-//! A sample's time is snapped to the nearest multiple of the period (its *slot*). Rows wait in a
-//! small pending map until every required tag has arrived, and are closed strictly in slot order:
-//! a complete row closes as soon as the row before it has; any row closes, complete or not, once
-//! the newest sample is `tolerance` slots past it. An incomplete closed row is a gap. Samples for
-//! a closed slot are dropped, so memory stays bounded by `tolerance` whatever the input does.
+//! A sample's time is snapped to the nearest multiple of the period (its *slot*). Each tag has a
+//! *watermark*, the newest slot it has published. Rows wait in a pending map and close strictly
+//! in slot order: a row closes once every tag's watermark has reached it (every tag has published
+//! it or moved past it), or once it has waited `grace` seconds of wall clock for a tag that went
+//! silent, or, when `tolerance` is set, once the newest sample is `tolerance` slots past it. So a
+//! historian that publishes one tag's batch after another's, in any order and of any size up to
+//! the window, aligns without loss: rows simply wait until the last tag's batch has passed them.
+//! A row that closes incomplete is a gap. The pending map never holds more than a window of rows
+//! (the oldest closes early, counted as an overflow).
 //!
-//! Jumps of the source clock: a sample far ahead of the newest slot (more than the jump
-//! threshold, `4 (tolerance + 1)` slots) or older than the window is not trusted at once: one
-//! bogus time would otherwise close every open row (ahead), and a clock set back would have
-//! everything that follows refused (behind). Such samples start a *jump candidate* and are
-//! dropped, as `time_jump` ahead and as `late` behind. A
+//! Back-fill: a sample for a row already closed incomplete, or for a slot no tag published,
+//! fills that *hole* if it lies inside the window; the row is re-emitted (marked `backfill`) once
+//! complete. A sample for a complete closed row is a duplicate; one older than the window is late.
+//! Holes and the record of closed rows are bounded by the window too.
+//!
+//! Jumps of the source clock: a sample more than a window ahead of the newest slot, or older than
+//! the window, is not trusted at once: one bogus time would otherwise close every open row
+//! (ahead), and a clock set back would have everything that follows refused (behind). Such
+//! samples start a *jump candidate* and are dropped, as `time_jump` ahead and as `late` behind. A
 //! sample on the current timeline cancels the candidate (a glitch); a candidate fed without
 //! interruption by enough samples from at least half the columns becomes the new timeline
 //! (a jump forward is an ordinary gap once confirmed; a jump back restarts the window).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use mpmwatch_core::model::{MimoModel, MimoState};
 
@@ -31,7 +40,8 @@ pub enum DropReason {
     NonFinite,
     /// The slot already holds a value for this tag.
     Duplicate,
-    /// Its row was already closed: it arrived more than `tolerance` samples behind the newest.
+    /// Its row had already closed complete: a repeat that arrives after its row left (while the
+    /// row is pending, or for a hole the tag already filled, a repeat is a `duplicate`).
     OutOfOrder,
     /// Older than the whole window: of no use any more (e.g. a historian back-fill).
     Late,
@@ -83,6 +93,8 @@ pub struct ClosedRow {
     pub slot: i64,
     /// Column values; `None` where the tag never arrived.
     pub values: Vec<Option<f64>>,
+    /// A hole of an earlier closed row, now complete by back-fill: it replaces that slot.
+    pub backfill: bool,
 }
 
 /// A confirmed jump of the source clock.
@@ -112,39 +124,69 @@ struct Candidate {
     columns: Vec<bool>,
 }
 
+/// A row waiting for its tags.
+#[derive(Debug, Clone)]
+struct Pending {
+    values: Vec<Option<f64>>,
+    /// Wall-clock seconds when its first sample arrived.
+    opened: f64,
+}
+
+/// Uninterrupted rows' worth of samples that confirm a jump of the clock back. A confirmed jump
+/// back discards the window, and a historian back-fill older than the window looks the same at
+/// first; a back-fill interleaved with live data never qualifies.
+const CONFIRM_BACK_ROWS: usize = 8;
+
 /// Snaps samples to the grid and closes rows in order.
 #[derive(Debug, Clone)]
 pub struct Aligner {
     period: f64,
-    tolerance: i64,
     window: i64,
+    grace: f64,
+    tolerance: Option<i64>,
     required: Vec<bool>,
-    pending: BTreeMap<i64, Vec<Option<f64>>>,
+    pending: BTreeMap<i64, Pending>,
+    watermark: Vec<Option<i64>>,
+    holes: BTreeMap<i64, Vec<Option<f64>>>,
+    done: BTreeSet<i64>,
     newest: Option<i64>,
     closed_through: Option<i64>,
     candidate: Option<Candidate>,
     jumps: Vec<Jump>,
+    overflow: u64,
+    /// Wall-clock time of the first sample offered.
+    started: Option<f64>,
 }
 
 impl Aligner {
-    /// `required[c]` says whether column `c` must be present for a row to be complete.
-    pub fn new(period: f64, tolerance: usize, window: usize, required: Vec<bool>) -> Self {
+    /// `required[c]` says whether column `c` must be present for a row to be complete. A row
+    /// waits at most `grace` wall-clock seconds for a silent tag; `tolerance` slots past the
+    /// newest sample also close it when non-zero (0: watermarks and grace only).
+    pub fn new(period: f64, window: usize, grace: f64, tolerance: usize, required: Vec<bool>) -> Self {
+        let width = required.len();
         Self {
             period,
-            tolerance: tolerance as i64,
-            window: window as i64,
+            window: window.max(1) as i64,
+            grace,
+            tolerance: (tolerance > 0).then_some(tolerance as i64),
             required,
             pending: BTreeMap::new(),
+            watermark: vec![None; width],
+            holes: BTreeMap::new(),
+            done: BTreeSet::new(),
             newest: None,
             closed_through: None,
             candidate: None,
             jumps: Vec::new(),
+            overflow: 0,
+            started: None,
         }
     }
 
-    /// Slots away from the newest beyond which a sample is a jump candidate.
+    /// Slots ahead of the newest beyond which a sample is a jump candidate: a window. A jump
+    /// forward by less is an ordinary gap; by more, one bogus time would empty the window.
     pub fn jump_threshold(&self) -> i64 {
-        4 * (self.tolerance + 1)
+        self.window
     }
 
     /// Uninterrupted samples that confirm a jump forward: two rows' worth. Little is lost when
@@ -153,16 +195,19 @@ impl Aligner {
         2 * self.required.len()
     }
 
-    /// Uninterrupted samples that confirm a jump back: `tolerance + 1` rows' worth, since a
-    /// confirmed jump back discards the window and a historian back-fill looks the same at first.
     fn confirm_backward(&self) -> usize {
-        (self.tolerance as usize + 1) * self.required.len()
+        CONFIRM_BACK_ROWS * self.required.len()
     }
 
     /// Jumps confirmed since the last call, oldest first (the caller resets what depends on
     /// the timeline).
     pub fn take_jumps(&mut self) -> Vec<Jump> {
         std::mem::take(&mut self.jumps)
+    }
+
+    /// Rows closed early because the pending map held a window of rows, since the last call.
+    pub fn take_overflow(&mut self) -> u64 {
+        std::mem::take(&mut self.overflow)
     }
 
     /// Whether `slot` lies so far from the current timeline that it may be a jump, and what it
@@ -200,11 +245,14 @@ impl Aligner {
     /// samples start afresh after `to − 1`.
     fn confirm_jump(&mut self, to: i64, out: &mut Vec<ClosedRow>) {
         let from = self.newest.unwrap_or(to);
-        while let Some((slot, values)) = self.pending.pop_first() {
-            out.push(ClosedRow { slot, values });
+        while let Some((slot, row)) = self.pending.pop_first() {
+            out.push(ClosedRow { slot, values: row.values, backfill: false });
         }
         self.candidate = None;
         self.closed_through = None;
+        self.holes.clear();
+        self.done.clear();
+        self.watermark.iter_mut().for_each(|w| *w = None);
         self.newest = Some(to);
         self.jumps.push(Jump { from, to });
     }
@@ -221,17 +269,26 @@ impl Aligner {
         (s.is_finite() && s.abs() < 9.0e15).then_some(s as i64)
     }
 
-    /// Rows waiting for tags (bounded by the tolerance).
+    /// Rows waiting for tags (at most a window).
     pub fn pending(&self) -> usize {
         self.pending.len()
     }
 
-    /// Offers one sample of column `col`; rows that close as a result are appended to `out`.
-    pub fn offer(&mut self, col: usize, t: f64, v: f64, out: &mut Vec<ClosedRow>) -> Result<(), DropReason> {
+    /// Offers one sample of column `col` at wall-clock time `now` (seconds, any monotonic
+    /// origin); rows that close as a result are appended to `out`.
+    pub fn offer(
+        &mut self,
+        col: usize,
+        t: f64,
+        v: f64,
+        now: f64,
+        out: &mut Vec<ClosedRow>,
+    ) -> Result<(), DropReason> {
         if !v.is_finite() {
             return Err(DropReason::NonFinite);
         }
         let slot = self.slot(t).ok_or(DropReason::BadPayload)?;
+        self.started.get_or_insert(now);
         if let Some(reason) = self.far(slot) {
             if self.feed_candidate(col, slot) {
                 let to = self.candidate.as_ref().map_or(slot, |c| c.newest);
@@ -242,33 +299,92 @@ impl Aligner {
         if let Some(c) = self.closed_through
             && slot <= c
         {
-            return Err(if slot <= c - self.window { DropReason::Late } else { DropReason::OutOfOrder });
+            self.backfill(col, slot, v, out)?;
+        } else {
+            let width = self.required.len();
+            let row =
+                self.pending.entry(slot).or_insert_with(|| Pending { values: vec![None; width], opened: now });
+            if row.values[col].is_some() {
+                return Err(DropReason::Duplicate);
+            }
+            row.values[col] = Some(v);
         }
-        let width = self.required.len();
-        let row = self.pending.entry(slot).or_insert_with(|| vec![None; width]);
-        if row[col].is_some() {
-            return Err(DropReason::Duplicate);
-        }
-        row[col] = Some(v);
         // A sample on the current timeline: a pending jump was a glitch.
         self.candidate = None;
         self.newest = Some(self.newest.map_or(slot, |n| n.max(slot)));
-        self.close(out);
+        let w = &mut self.watermark[col];
+        *w = Some(w.map_or(slot, |m| m.max(slot)));
+        self.close(now, out);
         Ok(())
     }
 
-    fn close(&mut self, out: &mut Vec<ClosedRow>) {
+    /// Closes the rows whose grace has expired at wall-clock `now` (the scheduler calls this
+    /// before an analysis, so a tag that went silent does not hold rows while nothing arrives).
+    pub fn tick(&mut self, now: f64, out: &mut Vec<ClosedRow>) {
+        self.close(now, out);
+    }
+
+    /// A sample for a closed slot inside the window: it fills that slot's hole.
+    fn backfill(&mut self, col: usize, slot: i64, v: f64, out: &mut Vec<ClosedRow>) -> Result<(), DropReason> {
+        if self.done.contains(&slot) {
+            return Err(DropReason::OutOfOrder);
+        }
+        let width = self.required.len();
+        let hole = self.holes.entry(slot).or_insert_with(|| vec![None; width]);
+        if hole[col].is_some() {
+            return Err(DropReason::Duplicate);
+        }
+        hole[col] = Some(v);
+        if self.is_complete(&self.holes[&slot]) {
+            let values = self.holes.remove(&slot).unwrap_or_default();
+            self.done.insert(slot);
+            out.push(ClosedRow { slot, values, backfill: true });
+        }
+        Ok(())
+    }
+
+    fn is_complete(&self, values: &[Option<f64>]) -> bool {
+        values.iter().zip(&self.required).all(|(v, &req)| !req || v.is_some())
+    }
+
+    fn close(&mut self, now: f64, out: &mut Vec<ClosedRow>) {
+        // A tag that has not published once in `grace` seconds since the first sample (an
+        // optional MV nobody publishes) holds no row; a tag that has published holds rows until
+        // its watermark passes them or their own grace expires.
+        let given_up = self.started.is_some_and(|s| now - s >= self.grace);
+        let passed_by_all = self
+            .watermark
+            .iter()
+            .zip(&self.required)
+            .filter(|(w, req)| **req && !(w.is_none() && given_up))
+            .map(|(w, _)| *w)
+            .min()
+            .flatten();
         let newest = self.newest.unwrap_or(i64::MIN);
         while let Some((&slot, row)) = self.pending.first_key_value() {
-            let complete = row.iter().zip(&self.required).all(|(v, &req)| !req || v.is_some());
-            let next_in_line = self.closed_through.is_none_or(|c| slot == c + 1);
-            let expired = slot <= newest - self.tolerance;
-            if !((complete && next_in_line) || expired) {
+            let passed = passed_by_all.is_some_and(|w| slot <= w);
+            let waited = now - row.opened >= self.grace;
+            let behind = self.tolerance.is_some_and(|tol| slot <= newest - tol);
+            let overflow = self.pending.len() as i64 > self.window;
+            if !(passed || waited || behind || overflow) {
                 break;
             }
-            let values = self.pending.pop_first().map(|(_, v)| v).unwrap_or_default();
+            if overflow && !(passed || waited || behind) {
+                self.overflow += 1;
+            }
+            let Some((_, row)) = self.pending.pop_first() else { break };
+            if self.is_complete(&row.values) {
+                self.done.insert(slot);
+            } else {
+                self.holes.insert(slot, row.values.clone());
+            }
             self.closed_through = Some(slot);
-            out.push(ClosedRow { slot, values });
+            out.push(ClosedRow { slot, values: row.values, backfill: false });
+        }
+        if let Some(c) = self.closed_through {
+            let keep_from = c.saturating_sub(self.window) + 1;
+            self.done = self.done.split_off(&keep_from);
+            self.holes = self.holes.split_off(&keep_from);
         }
     }
 }
@@ -382,6 +498,46 @@ impl Residuals {
         Some(WindowRow { slot: row.slot, mv, dither, cv, residual })
     }
 
+    /// The window row of a row completed by back-fill, which replaces a gap inside the window.
+    /// From predictions its residual is final; from a model it is left NaN, because the model
+    /// must be re-run through the window in slot order ([`Residuals::recompute`]).
+    pub fn backfilled(&self, row: &ClosedRow) -> Option<WindowRow> {
+        let l = self.layout;
+        let get = |c: usize| row.values[c];
+        let mv: Vec<f64> = (0..l.mv).map(|c| get(c).unwrap_or(f64::NAN)).collect();
+        let dither: Vec<f64> = (0..l.dither).map(|c| get(l.dither_at() + c)).collect::<Option<_>>()?;
+        let cv: Vec<f64> = (0..l.cv).map(|c| get(l.cv_at() + c)).collect::<Option<_>>()?;
+        let residual = if self.model.is_some() {
+            if mv.iter().any(|v| v.is_nan()) {
+                return None;
+            }
+            vec![f64::NAN; l.cv]
+        } else {
+            let pred: Vec<f64> = (0..l.pred).map(|c| get(l.pred_at() + c)).collect::<Option<_>>()?;
+            cv.iter().zip(&pred).map(|(y, p)| y - p).collect()
+        };
+        Some(WindowRow { slot: row.slot, mv, dither, cv, residual })
+    }
+
+    /// Whether residuals come from a model (and back-fill needs [`Residuals::recompute`]).
+    pub fn from_model_mode(&self) -> bool {
+        self.model.is_some()
+    }
+
+    /// Re-runs the model from a fresh warm-up through `rows` (the window, oldest first) and
+    /// rewrites their residuals; the state then continues after the newest row.
+    pub fn recompute<'r>(&mut self, rows: impl Iterator<Item = &'r mut WindowRow>) {
+        if self.model.is_none() {
+            return;
+        }
+        self.reset();
+        for r in rows {
+            if let Some(pred) = self.step_model(r.slot, &r.mv) {
+                r.residual = r.cv.iter().zip(&pred).map(|(y, p)| y - p).collect();
+            }
+        }
+    }
+
     /// Forgets the model state after a jump of the clock back: it restarts (warm-up) at the
     /// next row as after a long gap.
     pub fn reset(&mut self) {
@@ -440,37 +596,105 @@ mod tests {
 
     fn run(a: &mut Aligner, col: usize, t: f64, v: f64) -> (Result<(), DropReason>, Vec<i64>) {
         let mut out = Vec::new();
-        let r = a.offer(col, t, v, &mut out);
+        let r = a.offer(col, t, v, 0.0, &mut out);
         (r, out.iter().map(|r| r.slot).collect())
     }
 
-    #[test]
-    fn complete_rows_close_in_order_and_snap_to_the_grid() {
-        let mut a = Aligner::new(0.5, 3, 100, vec![true, true]);
-        assert_eq!(run(&mut a, 0, 1.02, 1.0), (Ok(()), vec![]));
-        assert_eq!(run(&mut a, 1, 0.98, 2.0), (Ok(()), vec![2]));
-        // slot 4 completes before slot 3: it waits for 3
-        let _ = run(&mut a, 0, 2.0, 1.0);
-        assert_eq!(run(&mut a, 1, 2.0, 1.0), (Ok(()), vec![]));
-        let _ = run(&mut a, 0, 1.5, 1.0);
-        assert_eq!(run(&mut a, 1, 1.5, 1.0), (Ok(()), vec![3, 4]));
+    fn aligner(period: f64, window: usize, width: usize) -> Aligner {
+        Aligner::new(period, window, 30.0, 0, vec![true; width])
     }
 
     #[test]
-    fn incomplete_rows_close_as_gaps_after_the_tolerance() {
-        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
-        let _ = run(&mut a, 0, 0.0, 1.0); // slot 0 never gets column 1
+    fn rows_close_once_every_tag_has_passed_them_and_snap_to_the_grid() {
+        let mut a = aligner(0.5, 100, 2);
+        assert_eq!(run(&mut a, 0, 1.02, 1.0), (Ok(()), vec![]));
+        assert_eq!(run(&mut a, 1, 0.98, 2.0), (Ok(()), vec![2]));
+        // Both tags jump from slot 2 to 4: slot 3 is a hole, and 4 closes.
+        let _ = run(&mut a, 0, 2.0, 1.0);
+        assert_eq!(run(&mut a, 1, 2.0, 1.0), (Ok(()), vec![4]));
+        // Slot 3 arriving afterwards is a back-fill: the row comes out when complete.
+        assert_eq!(run(&mut a, 0, 1.5, 1.0), (Ok(()), vec![]));
+        let mut out = Vec::new();
+        a.offer(1, 1.5, 1.0, 0.0, &mut out).unwrap();
+        assert_eq!(out, vec![ClosedRow { slot: 3, values: vec![Some(1.0), Some(1.0)], backfill: true }]);
+    }
+
+    #[test]
+    fn per_tag_batches_in_any_order_align_without_loss() {
+        // Three tags, 250-sample batches, tag order shuffled each round, window 1000.
+        let mut a = aligner(1.0, 1000, 3);
+        let mut out = Vec::new();
+        let orders = [[2, 0, 1], [0, 1, 2], [1, 2, 0], [2, 1, 0]];
+        for (round, order) in orders.iter().enumerate() {
+            for &col in order {
+                for k in 0..250 {
+                    let t = (round * 250 + k) as f64;
+                    assert_eq!(a.offer(col, t, t, 0.0, &mut out), Ok(()));
+                }
+            }
+        }
+        assert_eq!(out.len(), 1000);
+        assert!(out.iter().enumerate().all(|(k, r)| r.slot == k as i64
+            && !r.backfill
+            && r.values.iter().all(|v| *v == Some(k as f64))));
+        assert_eq!(a.pending(), 0);
+        assert_eq!(a.take_overflow(), 0);
+    }
+
+    #[test]
+    fn a_silent_tag_holds_rows_for_the_grace_and_its_back_fill_completes_them() {
+        let mut a = Aligner::new(1.0, 100, 30.0, 0, vec![true, true]);
+        let mut out = Vec::new();
+        for t in 0..5 {
+            a.offer(0, t as f64, 1.0, 0.0, &mut out).unwrap();
+            a.offer(1, t as f64, 2.0, 0.0, &mut out).unwrap();
+        }
+        assert_eq!(out.len(), 5);
+        out.clear();
+        // Tag 1 goes silent: tag 0's rows wait, then close as gaps once their grace expires.
+        for t in 5..10 {
+            a.offer(0, t as f64, 1.0, 10.0, &mut out).unwrap();
+        }
+        assert!(out.is_empty());
+        a.tick(39.9, &mut out);
+        assert!(out.is_empty());
+        a.tick(40.0, &mut out);
+        assert_eq!(out.iter().map(|r| r.slot).collect::<Vec<_>>(), vec![5, 6, 7, 8, 9]);
+        assert!(out.iter().all(|r| r.values[1].is_none() && !r.backfill));
+        out.clear();
+        // It comes back and back-fills: each hole is re-emitted complete.
+        for t in 5..10 {
+            a.offer(1, t as f64, 2.0, 50.0, &mut out).unwrap();
+        }
+        assert_eq!(out.iter().map(|r| (r.slot, r.backfill)).collect::<Vec<_>>(), (5..10).map(|s| (s, true)).collect::<Vec<_>>());
+        assert_eq!(a.offer(1, 7.0, 2.0, 50.0, &mut Vec::new()), Err(DropReason::OutOfOrder));
+    }
+
+    #[test]
+    fn a_tag_nobody_publishes_holds_rows_only_until_the_grace_after_the_first_sample() {
+        let mut a = Aligner::new(1.0, 100, 5.0, 0, vec![true, true]);
+        let mut out = Vec::new();
+        a.offer(0, 0.0, 1.0, 0.0, &mut out).unwrap();
+        a.offer(0, 1.0, 1.0, 1.0, &mut out).unwrap();
+        assert!(out.is_empty());
+        a.offer(0, 2.0, 1.0, 5.0, &mut out).unwrap();
+        assert_eq!(out.iter().map(|r| r.slot).collect::<Vec<_>>(), vec![0, 1, 2]);
+    }
+
+    #[test]
+    fn a_tolerance_closes_rows_on_event_time_too() {
+        let mut a = Aligner::new(1.0, 100, 30.0, 2, vec![true, true]);
+        let _ = run(&mut a, 0, 0.0, 1.0);
         let _ = run(&mut a, 0, 1.0, 1.0);
         assert_eq!(run(&mut a, 0, 2.0, 1.0).1, vec![0]);
         let mut out = Vec::new();
-        a.offer(0, 3.0, 1.0, &mut out).unwrap();
+        a.offer(0, 3.0, 1.0, 0.0, &mut out).unwrap();
         assert_eq!(out[0].values, vec![Some(1.0), None]);
-        assert!(a.pending() <= 3);
     }
 
     #[test]
     fn every_drop_reason() {
-        let mut a = Aligner::new(1.0, 2, 10, vec![true]);
+        let mut a = aligner(1.0, 10, 1);
         assert_eq!(run(&mut a, 0, 0.0, f64::NAN).0, Err(DropReason::NonFinite));
         assert_eq!(run(&mut a, 0, f64::INFINITY, 1.0).0, Err(DropReason::BadPayload));
         for t in 0..30 {
@@ -479,7 +703,7 @@ mod tests {
         assert_eq!(run(&mut a, 0, 29.0, 1.0).0, Err(DropReason::OutOfOrder));
         assert_eq!(run(&mut a, 0, 25.0, 1.0).0, Err(DropReason::OutOfOrder));
         assert_eq!(run(&mut a, 0, 3.0, 1.0).0, Err(DropReason::Late));
-        let mut b = Aligner::new(1.0, 2, 10, vec![true, true]);
+        let mut b = aligner(1.0, 10, 2);
         let _ = run(&mut b, 0, 5.0, 1.0);
         assert_eq!(run(&mut b, 0, 5.0, 1.0).0, Err(DropReason::Duplicate));
     }
@@ -487,18 +711,18 @@ mod tests {
     /// Offers one sample per column at `t`; returns the closed slots and the drops.
     fn round(a: &mut Aligner, t: f64) -> (Vec<i64>, Vec<DropReason>) {
         let mut out = Vec::new();
-        let drops = (0..a.required.len()).filter_map(|c| a.offer(c, t, 1.0, &mut out).err()).collect();
+        let drops = (0..a.required.len()).filter_map(|c| a.offer(c, t, 1.0, 0.0, &mut out).err()).collect();
         (out.iter().filter(|r| r.values.iter().all(Option::is_some)).map(|r| r.slot).collect(), drops)
     }
 
     #[test]
     fn a_single_bogus_time_ahead_is_a_glitch_and_disturbs_nothing() {
-        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
+        let mut a = aligner(1.0, 100, 2);
         for t in 0..10 {
             round(&mut a, t as f64);
         }
         let mut out = Vec::new();
-        assert_eq!(a.offer(0, 10_800.0, 1.0, &mut out), Err(DropReason::TimeJump));
+        assert_eq!(a.offer(0, 10_800.0, 1.0, 0.0, &mut out), Err(DropReason::TimeJump));
         assert!(out.is_empty(), "no open row closes on a bogus time");
         assert_eq!(round(&mut a, 10.0), (vec![10], vec![]));
         assert!(a.take_jumps().is_empty());
@@ -506,7 +730,7 @@ mod tests {
 
     #[test]
     fn a_jump_ahead_confirmed_by_all_columns_becomes_the_timeline() {
-        let mut a = Aligner::new(1.0, 2, 100, vec![true, true]);
+        let mut a = aligner(1.0, 100, 2);
         for t in 0..10 {
             round(&mut a, t as f64);
         }
@@ -521,7 +745,7 @@ mod tests {
 
     #[test]
     fn a_jump_back_needs_a_longer_uninterrupted_run_and_restarts_the_timeline() {
-        let mut a = Aligner::new(1.0, 2, 10, vec![true, true]);
+        let mut a = aligner(1.0, 10, 2);
         for t in 1000..1020 {
             round(&mut a, t as f64);
         }
@@ -531,25 +755,34 @@ mod tests {
             round(&mut a, (1020 + t) as f64);
         }
         assert!(a.take_jumps().is_empty());
-        // Alone it is a clock set back: (tolerance + 1) rows' worth confirm it.
-        for t in 100..103 {
+        // Alone it is a clock set back: CONFIRM_BACK_ROWS rows' worth confirm it.
+        for t in 100..100 + CONFIRM_BACK_ROWS as i64 {
             assert_eq!(round(&mut a, t as f64).1, vec![DropReason::Late; 2]);
         }
         let jumps = a.take_jumps();
-        assert_eq!(jumps, vec![Jump { from: 1029, to: 102 }]);
+        let to = 100 + CONFIRM_BACK_ROWS as i64 - 1;
+        assert_eq!(jumps, vec![Jump { from: 1029, to }]);
         assert!(jumps[0].is_backward());
-        assert_eq!(round(&mut a, 103.0), (vec![103], vec![]));
+        assert_eq!(round(&mut a, (to + 1) as f64), (vec![to + 1], vec![]));
     }
 
     #[test]
     fn memory_stays_bounded_whatever_the_times() {
-        let mut a = Aligner::new(1.0, 4, 10, vec![true, true]);
+        let mut a = aligner(1.0, 10, 2);
         let mut out = Vec::new();
         for k in 0..10_000u64 {
             let t = ((k * 7919) % 1000) as f64;
-            let _ = a.offer((k % 2) as usize, t, 1.0, &mut out);
-            assert!(a.pending() <= 5);
+            let _ = a.offer((k % 2) as usize, t, 1.0, 0.0, &mut out);
+            assert!(a.pending() <= 10);
+            assert!(a.holes.len() <= 10 && a.done.len() <= 10);
         }
+        // One tag far ahead of the other: the pending rows are capped at the window.
+        let mut b = aligner(1.0, 10, 2);
+        for t in 0..50 {
+            let _ = b.offer(0, t as f64, 1.0, 0.0, &mut out);
+        }
+        assert_eq!(b.pending(), 10);
+        assert_eq!(b.take_overflow(), 40);
     }
 
     #[test]
@@ -566,11 +799,11 @@ mod tests {
         let y = model.simulate(&[full]).unwrap().remove(0);
         for (k, &uk) in u.iter().enumerate() {
             let yk = y[WARM_UP + k];
-            let row = ClosedRow { slot: k as i64, values: vec![Some(uk), Some(0.0), Some(yk + 1.0)] };
+            let row = ClosedRow { slot: k as i64, values: vec![Some(uk), Some(0.0), Some(yk + 1.0)], backfill: false };
             let w = r.process(&row).unwrap();
             assert!((w.residual[0] - 1.0).abs() < 1e-12, "k {k}: {:?}", w.residual);
         }
         // a gap (missing CV) is no row, but the model keeps time
-        assert!(r.process(&ClosedRow { slot: 50, values: vec![Some(0.0), Some(0.0), None] }).is_none());
+        assert!(r.process(&ClosedRow { slot: 50, values: vec![Some(0.0), Some(0.0), None], backfill: false }).is_none());
     }
 }

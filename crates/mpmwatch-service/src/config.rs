@@ -379,9 +379,16 @@ pub struct ControllerConfig {
     /// Seconds between analyses (wall clock).
     #[serde(default = "default_every")]
     pub every: f64,
-    /// Reorder tolerance in samples: a row waits this many sample periods past the newest
-    /// sample for its missing tags before it is closed (as a gap if still incomplete).
-    #[serde(default = "default_tolerance")]
+    /// Wall-clock seconds a row waits for a tag that has gone silent before it closes as a gap.
+    /// Rows otherwise close when every tag's newest sample has passed them (per-tag
+    /// watermarks), so per-tag batches of any size up to the window align without loss; a tag
+    /// that returns within the window back-fills the gaps it left.
+    #[serde(default = "default_grace")]
+    pub grace: f64,
+    /// Optional event-time bound, in samples: when non-zero, a row also closes once the newest
+    /// sample is this many periods past it, whatever the other tags' watermarks (lower latency
+    /// for feeds that interleave tags; a tag that lags more back-fills). 0 (default): off.
+    #[serde(default)]
     pub tolerance: usize,
     /// Raise a channel's alarm after this many significant runs in a row.
     #[serde(default = "default_raise")]
@@ -427,8 +434,8 @@ fn default_seed() -> u64 {
 fn default_every() -> f64 {
     10.0
 }
-fn default_tolerance() -> usize {
-    5
+fn default_grace() -> f64 {
+    60.0
 }
 fn default_raise() -> u32 {
     2
@@ -439,6 +446,8 @@ fn default_clear() -> u32 {
 
 /// Longest window, samples: bounds the memory of a controller whatever the file says.
 pub const MAX_WINDOW: usize = 1_000_000;
+/// Longest grace, seconds (a day).
+pub const MAX_GRACE: f64 = 86_400.0;
 /// Largest reorder tolerance, samples.
 pub const MAX_TOLERANCE: usize = 100_000;
 /// Most surrogates per element.
@@ -657,6 +666,9 @@ impl ControllerConfig {
                 "{key}.tolerance: {} is too large (at most {MAX_TOLERANCE} samples)",
                 self.tolerance
             ));
+        }
+        if !(self.grace.is_finite() && (0.0..=MAX_GRACE).contains(&self.grace)) {
+            p.push(format!("{key}.grace: {} must be a number of seconds in 0..={MAX_GRACE}", self.grace));
         }
         if self.surrogates > MAX_SURROGATES {
             p.push(format!("{key}.surrogates: {} is too many (at most {MAX_SURROGATES})", self.surrogates));

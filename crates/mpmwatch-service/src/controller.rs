@@ -33,6 +33,10 @@ pub struct IngestOutcome {
     pub gap_rows: u64,
     /// Jumps of the source clock this message confirmed.
     pub time_jumps: u64,
+    /// Rows completed by back-fill that this message put into the window.
+    pub backfilled_rows: u64,
+    /// Rows closed early because a window of rows was already pending.
+    pub overflow_rows: u64,
 }
 
 impl IngestOutcome {
@@ -71,6 +75,12 @@ pub struct Controller {
     pub gap_rows: u64,
     /// Confirmed jumps of the source clock since start.
     pub time_jumps: u64,
+    /// Rows completed by back-fill since start.
+    pub backfilled_rows: u64,
+    /// Rows closed early because the pending rows filled a window, since start.
+    pub overflow_rows: u64,
+    /// The origin of the wall clock the aligner's grace is measured on.
+    clock: std::time::Instant,
     /// The stored rows must be replaced, not extended, at the next flush (the clock jumped
     /// back, so they lie in the new timeline's future).
     pub store_reset: bool,
@@ -104,7 +114,7 @@ impl Controller {
             ResidualSource::Pred => Residuals::from_pred(layout),
             ResidualSource::Model => Residuals::from_model(layout, cfg.nominal_model()?, cfg.window),
         };
-        let aligner = Aligner::new(cfg.period, cfg.tolerance, cfg.window, residuals.required());
+        let aligner = Aligner::new(cfg.period, cfg.window, cfg.grace, cfg.tolerance, residuals.required());
         Ok(Self {
             columns,
             aligner,
@@ -119,6 +129,9 @@ impl Controller {
             running: false,
             gap_rows: 0,
             time_jumps: 0,
+            backfilled_rows: 0,
+            overflow_rows: 0,
+            clock: std::time::Instant::now(),
             store_reset: false,
             cfg,
         })
@@ -126,13 +139,42 @@ impl Controller {
 
     /// Decodes and aligns one message on `<role>/<tag>`, and counts what it did.
     pub fn ingest(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
-        let out = self.ingest_uncounted(role, tag, bytes);
+        let now = self.clock.elapsed().as_secs_f64();
+        self.ingest_at(role, tag, bytes, now)
+    }
+
+    /// [`Controller::ingest`] at wall-clock `now` (seconds since the controller started).
+    pub fn ingest_at(&mut self, role: Role, tag: &str, bytes: &[u8], now: f64) -> IngestOutcome {
+        let out = self.ingest_uncounted(role, tag, bytes, now);
+        self.count(&out);
+        out
+    }
+
+    /// Closes the rows whose grace has expired (called before each analysis, so a tag that went
+    /// silent holds rows for at most its grace even when nothing else arrives).
+    pub fn tick(&mut self) -> IngestOutcome {
+        let now = self.clock.elapsed().as_secs_f64();
+        self.tick_at(now)
+    }
+
+    /// [`Controller::tick`] at wall-clock `now`.
+    pub fn tick_at(&mut self, now: f64) -> IngestOutcome {
+        let mut out = IngestOutcome::default();
+        let mut closed = Vec::new();
+        self.aligner.tick(now, &mut closed);
+        self.take_rows(closed, &mut out);
+        self.count(&out);
+        out
+    }
+
+    fn count(&mut self, out: &IngestOutcome) {
         self.ingested += out.accepted;
         self.gap_rows += out.gap_rows;
+        self.backfilled_rows += out.backfilled_rows;
+        self.overflow_rows += out.overflow_rows;
         for (r, n) in &out.dropped {
             *self.dropped.entry(*r).or_default() += n;
         }
-        out
     }
 
     /// Counts drops decided outside [`Controller::ingest`] (a key of the wrong shape).
@@ -140,7 +182,7 @@ impl Controller {
         *self.dropped.entry(reason).or_default() += n;
     }
 
-    fn ingest_uncounted(&mut self, role: Role, tag: &str, bytes: &[u8]) -> IngestOutcome {
+    fn ingest_uncounted(&mut self, role: Role, tag: &str, bytes: &[u8], now: f64) -> IngestOutcome {
         let mut out = IngestOutcome::default();
         let samples = match payload::decode(bytes) {
             Ok(s) => s,
@@ -161,7 +203,7 @@ impl Controller {
             let res = if s.t > latest_ok {
                 Err(DropReason::Future)
             } else {
-                self.aligner.offer(col, s.t, s.v, &mut closed)
+                self.aligner.offer(col, s.t, s.v, now, &mut closed)
             };
             match res {
                 Ok(()) => out.accepted += 1,
@@ -173,22 +215,44 @@ impl Controller {
                 }
             }
             // Rows of the old timeline are done before a jump resets what depends on it.
-            for row in closed.drain(..) {
-                if let Some(w) = self.residuals.process(&row) {
-                    if let Some(last) = self.window.last_slot()
-                        && w.slot > last + 1
-                    {
-                        out.gap_rows += (w.slot - last - 1) as u64;
-                    }
-                    self.push_row(w);
-                }
-            }
+            self.take_rows(std::mem::take(&mut closed), &mut out);
             for jump in self.aligner.take_jumps() {
                 out.time_jumps += 1;
                 self.on_jump(jump);
             }
         }
         out
+    }
+
+    /// Moves closed rows into the window. A back-filled row takes its slot's place; from a
+    /// model, the window's residuals are then recomputed in slot order and all rewritten.
+    fn take_rows(&mut self, closed: Vec<ClosedRow>, out: &mut IngestOutcome) {
+        let mut backfilled = false;
+        for row in closed {
+            if row.backfill {
+                if let Some(w) = self.residuals.backfilled(&row)
+                    && self.window.insert(w.clone())
+                {
+                    out.backfilled_rows += 1;
+                    backfilled = true;
+                    self.queue_unsaved(w);
+                }
+                continue;
+            }
+            if let Some(w) = self.residuals.process(&row) {
+                if let Some(last) = self.window.last_slot()
+                    && w.slot > last + 1
+                {
+                    out.gap_rows += (w.slot - last - 1) as u64;
+                }
+                self.push_row(w);
+            }
+        }
+        if backfilled && self.residuals.from_model_mode() {
+            self.residuals.recompute(self.window.rows_mut());
+            self.unsaved = self.window.rows().cloned().collect();
+        }
+        out.overflow_rows += self.aligner.take_overflow();
     }
 
     /// A confirmed jump of the source clock. Forward it is a gap and needs nothing; back, the
@@ -212,11 +276,15 @@ impl Controller {
 
     fn push_row(&mut self, w: WindowRow) {
         if self.window.push(w.clone()) {
-            if self.unsaved.len() == self.cfg.window {
-                self.unsaved.pop_front();
-            }
-            self.unsaved.push_back(w);
+            self.queue_unsaved(w);
         }
+    }
+
+    fn queue_unsaved(&mut self, w: WindowRow) {
+        if self.unsaved.len() == self.cfg.window {
+            self.unsaved.pop_front();
+        }
+        self.unsaved.push_back(w);
     }
 
     /// Puts rows whose write failed back in front of the unsaved queue, keeping at most a
@@ -351,7 +419,7 @@ tolerance = 2
         assert_eq!(o.dropped, vec![(DropReason::BadPayload, 1)]);
         let o = c.ingest(Role::Cv, "y1", br#"{"t": [20, 21, 3], "v": [1, "NaN", 2]}"#);
         assert_eq!(o.accepted, 1);
-        assert_eq!(o.dropped, vec![(DropReason::NonFinite, 1), (DropReason::OutOfOrder, 1)]);
+        assert_eq!(o.dropped, vec![(DropReason::NonFinite, 1), (DropReason::Duplicate, 1)], "slot 3 holds y1 already");
         assert_eq!(c.ingested, 31);
         let o = c.ingest(Role::Cv, "y1", br#"{"t": "2999-01-01T00:00:00Z", "v": 1}"#);
         assert_eq!(o.dropped, vec![(DropReason::Future, 1)]);
@@ -359,6 +427,65 @@ tolerance = 2
         assert_eq!(o.accepted, 1, "a bogus future time does not disturb what follows");
         assert_eq!(c.dropped[&DropReason::UnknownTag], 1);
         assert_eq!(c.dropped[&DropReason::BadPayload], 1);
+    }
+
+    #[test]
+    fn per_tag_batches_and_a_back_fill_give_the_rows_of_an_in_order_feed() {
+        let text = r#"
+[[controller]]
+id = "m1"
+period = 1.0
+mv = ["u1"]
+dither = ["ud1"]
+cv = ["y1"]
+residual = "model"
+window = 128
+min_samples = 32
+lag_max = 3
+grace = 30.0
+[[controller.model]]
+mv = "u1"
+cv = "y1"
+b = [0.0, 0.5]
+a = [1.0, -0.7]
+"#;
+        let cfg = Config::parse(text, "t").unwrap().controllers[0].clone();
+        let u = |k: usize| ((k * 7) % 5) as f64;
+        let d = |k: usize| if (k * 13) % 7 < 3 { 1.0 } else { -1.0 };
+        let y = |k: usize| (k as f64 * 0.3).sin();
+        let batch = |f: &dyn Fn(usize) -> f64, ks: std::ops::Range<usize>| {
+            let t: Vec<f64> = ks.clone().map(|k| k as f64).collect();
+            let v: Vec<f64> = ks.map(f).collect();
+            serde_json::json!({ "t": t, "v": v }).to_string()
+        };
+        let mut in_order = Controller::new(cfg.clone()).unwrap();
+        for k in 0..100 {
+            in_order.ingest_at(Role::Mv, "u1", payload::encode(k as f64, u(k)).as_bytes(), 0.0);
+            in_order.ingest_at(Role::Dither, "ud1", payload::encode(k as f64, d(k)).as_bytes(), 0.0);
+            in_order.ingest_at(Role::Cv, "y1", payload::encode(k as f64, y(k)).as_bytes(), 0.0);
+        }
+        // Per-tag batches of 50, CV first; then the CV falls silent for 20 samples past the
+        // grace, and back-fills them after the other tags have moved on.
+        let mut batched = Controller::new(cfg).unwrap();
+        let mut accepted = 0;
+        for ks in [0..50, 50..100] {
+            let cv_ks = if ks.start == 50 { 50..60 } else { ks.clone() };
+            accepted += batched.ingest_at(Role::Cv, "y1", batch(&y, cv_ks).as_bytes(), 0.0).accepted;
+            accepted += batched.ingest_at(Role::Dither, "ud1", batch(&d, ks.clone()).as_bytes(), 0.0).accepted;
+            accepted += batched.ingest_at(Role::Mv, "u1", batch(&u, ks).as_bytes(), 0.0).accepted;
+        }
+        batched.tick_at(31.0);
+        assert_eq!(batched.window.len(), 60, "rows 60..100 closed as gaps after the grace");
+        let fill = batched.ingest_at(Role::Cv, "y1", batch(&y, 60..100).as_bytes(), 40.0);
+        accepted += fill.accepted;
+        assert_eq!(fill.backfilled_rows, 40);
+        assert_eq!(accepted, 300, "every sample is ingested");
+        assert!(batched.dropped.values().all(|&n| n == 0), "{:?}", batched.dropped);
+        let rows = |c: &Controller| c.window.rows().map(|r| (r.slot, r.residual[0])).collect::<Vec<_>>();
+        let (a, b) = (rows(&in_order), rows(&batched));
+        assert_eq!(a.len(), 100);
+        assert_eq!(a.iter().map(|r| r.0).collect::<Vec<_>>(), b.iter().map(|r| r.0).collect::<Vec<_>>());
+        assert!(a.iter().zip(&b).all(|(p, q)| (p.1 - q.1).abs() < 1e-12), "residuals after recompute");
     }
 
     #[test]

@@ -164,6 +164,10 @@ pub struct ControllerStatus {
     pub gap_rows: u64,
     /// Confirmed jumps of the source clock.
     pub time_jumps: u64,
+    /// Gaps inside the window filled by back-fill.
+    pub backfilled_rows: u64,
+    /// Rows closed early because a window of rows was waiting for tags.
+    pub overflow_rows: u64,
     /// Status of the last run.
     pub last_run_status: Option<RunStatus>,
     /// Its time.
@@ -197,6 +201,8 @@ fn status(s: &Shared, id: &str) -> Option<ControllerStatus> {
             .collect(),
         gap_rows: c.gap_rows,
         time_jumps: c.time_jumps,
+        backfilled_rows: c.backfilled_rows,
+        overflow_rows: c.overflow_rows,
         last_run_status: latest.as_ref().map(|r| r.status),
         last_run_time: latest.as_ref().map(|r| r.time.clone()),
         last_run_duration_s: latest.as_ref().map(|r| r.duration_s),

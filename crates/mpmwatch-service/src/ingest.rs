@@ -117,7 +117,6 @@ fn fold(shared: &Shared, id: &str, queue: &Queue) {
 
 /// Handles one message on `key` (public for tests that bypass zenoh).
 pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
-    let labels = ControllerLabels { controller: id.to_string() };
     let Some(mut ctl) = shared.lock(id) else { return };
     let outcome = match parse_key(&shared.config.prefix, key) {
         Some(k) if k.controller == id => ctl.ingest(k.role, k.tag, bytes),
@@ -132,10 +131,21 @@ pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
     let fill = ctl.window.fill();
     let contiguous = ctl.window.contiguous_tail();
     drop(ctl);
+    record(shared, id, &outcome, fill, contiguous);
+    if let Some(p) = outcome.problem {
+        tracing::debug!(controller = id, key, "dropped: {p}");
+    }
+}
+
+/// Adds what an ingest (or a grace tick) did to the metrics.
+pub fn record(shared: &Shared, id: &str, outcome: &super::controller::IngestOutcome, fill: f64, contiguous: usize) {
+    let labels = ControllerLabels { controller: id.to_string() };
     let m = &shared.metrics;
     m.ingested.get_or_create(&labels).inc_by(outcome.accepted);
     m.gap_rows.get_or_create(&labels).inc_by(outcome.gap_rows);
     m.time_jumps.get_or_create(&labels).inc_by(outcome.time_jumps);
+    m.backfilled_rows.get_or_create(&labels).inc_by(outcome.backfilled_rows);
+    m.overflow_rows.get_or_create(&labels).inc_by(outcome.overflow_rows);
     for (r, n) in &outcome.dropped {
         m.dropped
             .get_or_create(&DropLabels { controller: id.to_string(), reason: r.as_str().into() })
@@ -143,9 +153,6 @@ pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
     }
     m.window_fill.get_or_create(&labels).set(fill);
     m.window_contiguous.get_or_create(&labels).set(contiguous as i64);
-    if let Some(p) = outcome.problem {
-        tracing::debug!(controller = id, key, "dropped: {p}");
-    }
 }
 
 /// Answers `get` on `<prefix>/<id>/matrix` with the latest report (or an error reply before the

@@ -102,6 +102,10 @@ pub struct Metrics {
     pub gap_rows: Family<ControllerLabels, Counter>,
     /// `mpm_time_jumps_total`: confirmed jumps of the source clock.
     pub time_jumps: Family<ControllerLabels, Counter>,
+    /// `mpm_backfilled_rows_total`: gaps inside the window filled by back-fill.
+    pub backfilled_rows: Family<ControllerLabels, Counter>,
+    /// `mpm_overflow_rows_total`: rows closed early because a window of rows was pending.
+    pub overflow_rows: Family<ControllerLabels, Counter>,
     /// `mpm_store_errors_total` by operation: failed writes to the store.
     pub store_errors: Family<StoreLabels, Counter>,
     /// `mpm_store_ok`: 1 while the store's last write succeeded (or there is no store), 0 while
@@ -146,6 +150,8 @@ impl Metrics {
             active_alarms: Family::default(),
             gap_rows: Family::default(),
             time_jumps: Family::default(),
+            backfilled_rows: Family::default(),
+            overflow_rows: Family::default(),
             store_errors: Family::default(),
             store_ok: Gauge::default(),
             queue_messages: Family::default(),
@@ -203,6 +209,16 @@ impl Metrics {
         registry.register("mpm_gap_rows", "Sample slots missing between window rows", m.gap_rows.clone());
         registry.register("mpm_time_jumps", "Confirmed jumps of the source clock", m.time_jumps.clone());
         registry.register(
+            "mpm_backfilled_rows",
+            "Gaps inside the window filled by back-filled samples",
+            m.backfilled_rows.clone(),
+        );
+        registry.register(
+            "mpm_overflow_rows",
+            "Rows closed early because a window of rows was waiting for tags",
+            m.overflow_rows.clone(),
+        );
+        registry.register(
             "mpm_store_errors",
             "Failed writes to the store, by operation",
             m.store_errors.clone(),
@@ -256,6 +272,8 @@ impl Metrics {
         let _ = self.active_alarms.get_or_create(&c);
         let _ = self.gap_rows.get_or_create(&c);
         let _ = self.time_jumps.get_or_create(&c);
+        let _ = self.backfilled_rows.get_or_create(&c);
+        let _ = self.overflow_rows.get_or_create(&c);
         let _ = self.window_fill.get_or_create(&c);
         let _ = self.queue_messages.get_or_create(&c);
         let _ = self.queue_bytes.get_or_create(&c);

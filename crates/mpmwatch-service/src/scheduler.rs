@@ -86,6 +86,9 @@ pub async fn run_once(shared: &Arc<Shared>, id: &str) -> Option<Arc<RunReport>> 
             return None;
         }
         ctl.running = true;
+        let ticked = ctl.tick();
+        let (fill, contiguous) = (ctl.window.fill(), ctl.window.contiguous_tail());
+        super::ingest::record(shared, id, &ticked, fill, contiguous);
         (ctl.cfg.clone(), ctl.window.snapshot(ctl.cfg.min_samples))
     };
     let time = now_rfc3339();

@@ -55,6 +55,32 @@ impl Window {
         true
     }
 
+    /// Puts a back-filled row at its slot: it replaces the row of that slot or fills a gap, and
+    /// evicts the oldest row when full. Refused (false) when it is older than every row of a
+    /// full window, since it would leave at once.
+    pub fn insert(&mut self, row: WindowRow) -> bool {
+        match self.rows.binary_search_by_key(&row.slot, |r| r.slot) {
+            Ok(k) => {
+                self.rows[k] = row;
+                true
+            }
+            Err(k) if k == self.rows.len() => self.push(row),
+            Err(0) if self.rows.len() == self.cap => false,
+            Err(k) => {
+                self.rows.insert(k, row);
+                if self.rows.len() > self.cap {
+                    self.rows.pop_front();
+                }
+                true
+            }
+        }
+    }
+
+    /// The rows, oldest first, for rewriting their residuals.
+    pub fn rows_mut(&mut self) -> impl Iterator<Item = &mut WindowRow> {
+        self.rows.iter_mut()
+    }
+
     /// Drops every row (after the source clock jumped back: the rows lie in its future).
     pub fn clear(&mut self) {
         self.rows.clear();
@@ -145,6 +171,24 @@ mod tests {
         assert_eq!(w.rows().map(|r| r.slot).collect::<Vec<_>>(), vec![6, 7, 8, 9]);
         assert!(!w.push(row(9)), "a repeated slot is refused");
         assert_eq!(w.fill(), 1.0);
+    }
+
+    #[test]
+    fn a_back_filled_row_fills_its_gap_or_replaces_its_slot() {
+        let mut w = Window::new(5);
+        for s in [1, 2, 4, 5] {
+            w.push(row(s));
+        }
+        assert!(w.insert(row(3)));
+        assert_eq!(w.rows().map(|r| r.slot).collect::<Vec<_>>(), vec![1, 2, 3, 4, 5]);
+        let mut again = row(3);
+        again.cv = vec![7.0];
+        assert!(w.insert(again));
+        assert_eq!(w.rows().nth(2).unwrap().cv, vec![7.0]);
+        assert!(!w.insert(row(0)), "older than a full window");
+        assert!(w.insert(row(6)));
+        assert_eq!(w.rows().map(|r| r.slot).collect::<Vec<_>>(), vec![2, 3, 4, 5, 6]);
+        assert_eq!(w.contiguous_tail(), 5);
     }
 
     #[test]
