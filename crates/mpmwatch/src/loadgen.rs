@@ -154,23 +154,22 @@ impl LoadgenOptions {
     }
 
     /// `[[controller]]` tables that match what this generator publishes; `extra` is appended to
-    /// each (window, lags, every, ...). `tolerance` is set to twice the batch, because tags
-    /// arrive one batch after another and a row must wait for its last tag (so `extra` must not
-    /// set it). Without `pred` the residual needs a model, which the synthetic loop has not: such
+    /// each (window, lags, every, ...). Tags arrive one batch after another; the monitor's
+    /// default alignment (per-tag watermarks) waits for the last tag, so nothing is tuned to the
+    /// batch. Without `pred` the residual needs a model, which the synthetic loop has not: such
     /// a config is refused by the monitor.
     pub fn controller_toml(&self, extra: &str) -> String {
         let list = |p: &str, n: usize| (1..=n).map(|i| format!("\"{p}{i}\"")).collect::<Vec<_>>().join(", ");
         let mut s = String::new();
         for i in 0..self.controllers {
             s.push_str(&format!(
-                "[[controller]]\nid = \"{}\"\nperiod = {}\nmv = [{}]\ndither = [{}]\ncv = [{}]\npred = [{}]\ntolerance = {}\n{extra}\n\n",
+                "[[controller]]\nid = \"{}\"\nperiod = {}\nmv = [{}]\ndither = [{}]\ncv = [{}]\npred = [{}]\n{extra}\n\n",
                 self.id(i),
                 self.period,
                 list("u", self.mvs),
                 list("ud", self.mvs),
                 list("y", self.cvs),
                 if self.pred { list("p", self.cvs) } else { String::new() },
-                (2 * self.batch).max(5),
             ));
         }
         s

@@ -39,7 +39,6 @@ min_samples = 200
 lag_min = 1
 lag_max = 3
 surrogates = 30
-tolerance = 25
 {extra}
 "#,
         store.unwrap_or_default()

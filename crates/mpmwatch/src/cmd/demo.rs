@@ -91,7 +91,6 @@ lag_max = 5
 surrogates = 40
 sigma = 6.0
 every = 3.0
-tolerance = 10
 raise_after = 2
 clear_after = 3
 "#,
