@@ -302,8 +302,10 @@ impl Aligner {
             self.backfill(col, slot, v, out)?;
         } else {
             let width = self.required.len();
-            let row =
-                self.pending.entry(slot).or_insert_with(|| Pending { values: vec![None; width], opened: now });
+            let row = self
+                .pending
+                .entry(slot)
+                .or_insert_with(|| Pending { values: vec![None; width], opened: now });
             if row.values[col].is_some() {
                 return Err(DropReason::Duplicate);
             }
@@ -325,7 +327,13 @@ impl Aligner {
     }
 
     /// A sample for a closed slot inside the window: it fills that slot's hole.
-    fn backfill(&mut self, col: usize, slot: i64, v: f64, out: &mut Vec<ClosedRow>) -> Result<(), DropReason> {
+    fn backfill(
+        &mut self,
+        col: usize,
+        slot: i64,
+        v: f64,
+        out: &mut Vec<ClosedRow>,
+    ) -> Result<(), DropReason> {
         if self.done.contains(&slot) {
             return Err(DropReason::OutOfOrder);
         }
@@ -666,7 +674,10 @@ mod tests {
         for t in 5..10 {
             a.offer(1, t as f64, 2.0, 50.0, &mut out).unwrap();
         }
-        assert_eq!(out.iter().map(|r| (r.slot, r.backfill)).collect::<Vec<_>>(), (5..10).map(|s| (s, true)).collect::<Vec<_>>());
+        assert_eq!(
+            out.iter().map(|r| (r.slot, r.backfill)).collect::<Vec<_>>(),
+            (5..10).map(|s| (s, true)).collect::<Vec<_>>()
+        );
         assert_eq!(a.offer(1, 7.0, 2.0, 50.0, &mut Vec::new()), Err(DropReason::OutOfOrder));
     }
 
@@ -799,11 +810,18 @@ mod tests {
         let y = model.simulate(&[full]).unwrap().remove(0);
         for (k, &uk) in u.iter().enumerate() {
             let yk = y[WARM_UP + k];
-            let row = ClosedRow { slot: k as i64, values: vec![Some(uk), Some(0.0), Some(yk + 1.0)], backfill: false };
+            let row = ClosedRow {
+                slot: k as i64,
+                values: vec![Some(uk), Some(0.0), Some(yk + 1.0)],
+                backfill: false,
+            };
             let w = r.process(&row).unwrap();
             assert!((w.residual[0] - 1.0).abs() < 1e-12, "k {k}: {:?}", w.residual);
         }
         // a gap (missing CV) is no row, but the model keeps time
-        assert!(r.process(&ClosedRow { slot: 50, values: vec![Some(0.0), Some(0.0), None], backfill: false }).is_none());
+        assert!(
+            r.process(&ClosedRow { slot: 50, values: vec![Some(0.0), Some(0.0), None], backfill: false })
+                .is_none()
+        );
     }
 }

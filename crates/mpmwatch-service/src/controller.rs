@@ -419,7 +419,11 @@ tolerance = 2
         assert_eq!(o.dropped, vec![(DropReason::BadPayload, 1)]);
         let o = c.ingest(Role::Cv, "y1", br#"{"t": [20, 21, 3], "v": [1, "NaN", 2]}"#);
         assert_eq!(o.accepted, 1);
-        assert_eq!(o.dropped, vec![(DropReason::NonFinite, 1), (DropReason::Duplicate, 1)], "slot 3 holds y1 already");
+        assert_eq!(
+            o.dropped,
+            vec![(DropReason::NonFinite, 1), (DropReason::Duplicate, 1)],
+            "slot 3 holds y1 already"
+        );
         assert_eq!(c.ingested, 31);
         let o = c.ingest(Role::Cv, "y1", br#"{"t": "2999-01-01T00:00:00Z", "v": 1}"#);
         assert_eq!(o.dropped, vec![(DropReason::Future, 1)]);
@@ -471,7 +475,8 @@ a = [1.0, -0.7]
         for ks in [0..50, 50..100] {
             let cv_ks = if ks.start == 50 { 50..60 } else { ks.clone() };
             accepted += batched.ingest_at(Role::Cv, "y1", batch(&y, cv_ks).as_bytes(), 0.0).accepted;
-            accepted += batched.ingest_at(Role::Dither, "ud1", batch(&d, ks.clone()).as_bytes(), 0.0).accepted;
+            accepted +=
+                batched.ingest_at(Role::Dither, "ud1", batch(&d, ks.clone()).as_bytes(), 0.0).accepted;
             accepted += batched.ingest_at(Role::Mv, "u1", batch(&u, ks).as_bytes(), 0.0).accepted;
         }
         batched.tick_at(31.0);

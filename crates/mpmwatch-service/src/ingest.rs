@@ -138,7 +138,13 @@ pub fn on_message(shared: &Shared, id: &str, key: &str, bytes: &[u8]) {
 }
 
 /// Adds what an ingest (or a grace tick) did to the metrics.
-pub fn record(shared: &Shared, id: &str, outcome: &super::controller::IngestOutcome, fill: f64, contiguous: usize) {
+pub fn record(
+    shared: &Shared,
+    id: &str,
+    outcome: &super::controller::IngestOutcome,
+    fill: f64,
+    contiguous: usize,
+) {
     let labels = ControllerLabels { controller: id.to_string() };
     let m = &shared.metrics;
     m.ingested.get_or_create(&labels).inc_by(outcome.accepted);

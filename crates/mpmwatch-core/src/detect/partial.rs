@@ -61,7 +61,8 @@ impl<'a> PartialPlan<'a> {
             blocks.push(cols.len()..cols.len() + max_lag + 1);
             cols.extend((0..=max_lag).map(|l| &dithers[k][max_lag - l..max_lag - l + rows]));
         }
-        let ls = if active.len() > 1 && rows > 0 { BlockLeastSquares::new(&cols, blocks, 0..rows) } else { None };
+        let ls =
+            if active.len() > 1 && rows > 0 { BlockLeastSquares::new(&cols, blocks, 0..rows) } else { None };
         Self { dithers: dithers.to_vec(), excited: excited.to_vec(), max_lag, ls, block_of }
     }
 
@@ -120,7 +121,9 @@ mod tests {
         };
         let d: Vec<Vec<f64>> = (0..4).map(bin).collect();
         let e: Vec<f64> = (0..n)
-            .map(|t| ((t * 7919) % 101) as f64 / 50.0 + if t >= 2 { d[1][t - 2] - 0.5 * d[3][t - 1] } else { 0.0 })
+            .map(|t| {
+                ((t * 7919) % 101) as f64 / 50.0 + if t >= 2 { d[1][t - 2] - 0.5 * d[3][t - 1] } else { 0.0 }
+            })
             .collect();
         let refs: Vec<&[f64]> = d.iter().map(Vec::as_slice).collect();
         let excited = [true, true, false, true];

@@ -60,8 +60,12 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
     }
     if counts.contains(&1) {
         // Singleton classes have no in-class neighbour and leave the sample altogether.
-        let (ys, ls): (Vec<f64>, Vec<u16>) =
-            y_sorted.iter().zip(labels).filter(|&(_, &l)| counts[l as usize] > 1).map(|(&v, &l)| (v, l)).unzip();
+        let (ys, ls): (Vec<f64>, Vec<u16>) = y_sorted
+            .iter()
+            .zip(labels)
+            .filter(|&(_, &l)| counts[l as usize] > 1)
+            .map(|(&v, &l)| (v, l))
+            .unzip();
         return ross_sorted(&ys, &ls, n_classes, k);
     }
     // Each class's samples, by their position in the whole sorted sample (a counting sort,

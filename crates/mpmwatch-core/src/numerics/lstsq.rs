@@ -270,7 +270,9 @@ mod tests {
     #[test]
     fn leaving_a_block_out_matches_the_regression_without_it() {
         let n = 300;
-        let col = |k: usize| -> Vec<f64> { (0..n).map(|t| (t as f64 * (0.31 + 0.17 * k as f64)).sin() + 0.1 * k as f64).collect() };
+        let col = |k: usize| -> Vec<f64> {
+            (0..n).map(|t| (t as f64 * (0.31 + 0.17 * k as f64)).sin() + 0.1 * k as f64).collect()
+        };
         let cols: Vec<Vec<f64>> = (0..6).map(col).collect();
         let y: Vec<f64> = (0..n).map(|t| (t as f64 * 0.37).sin() + 0.3 * cols[2][t] - cols[4][t]).collect();
         let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();

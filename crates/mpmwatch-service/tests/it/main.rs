@@ -4,6 +4,7 @@
 mod fault_support;
 mod service_alarm;
 mod service_faults;
+mod service_historian;
 mod service_http;
 mod service_ingest;
 mod service_security;
