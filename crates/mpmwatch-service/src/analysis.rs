@@ -10,7 +10,7 @@ use serde::Serialize;
 use mpmwatch_core::detect::{
     self, Cell, Evidence, LagChoice, MatrixOptions, MatrixResult, Method, Signal, Verdict,
 };
-use mpmwatch_core::info::{Lags, MiOptions, SurrogateOptions};
+use mpmwatch_core::info::{Lags, MiOptions, Statistic, SurrogateOptions};
 
 use super::config::ControllerConfig;
 use super::window::{Insufficient, Snapshot};
@@ -285,8 +285,63 @@ pub struct Profile {
     pub ccf: Vec<f64>,
     /// See `ccf`.
     pub ccf_limit: f64,
+    /// Under the family rule, the CCF's critical |r| per lag (its calibration surrogates'
+    /// `|μ| + z*σ`, z the family's critical standardised value): what decided, rather than
+    /// the Bonferroni `ccf_limit` shown beside it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ccf_critical: Option<Vec<f64>>,
+    /// Under the family rule, the joint-lag MI and its critical values per lag, bits.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint_bits: Option<Vec<f64>>,
+    /// See `joint_bits`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint_critical_bits: Option<Vec<f64>>,
+    /// The rule's p-value of the element and its alpha (family).
+    pub p_value: f64,
+    /// See `p_value`.
+    pub alpha: Option<f64>,
     /// Time of the run.
     pub time: String,
+}
+
+/// One channel's decision in one run, for the trend (`/trend`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrendPoint {
+    /// Time of the run, RFC 3339.
+    pub time: String,
+    /// The element's p-value.
+    pub p_value: f64,
+    /// Significant in that run.
+    pub significant: bool,
+    /// The deciding (or strongest) statistic, its value and critical value (see
+    /// [`ChannelSummary`]).
+    pub statistic: String,
+    /// See `statistic`.
+    pub value: f64,
+    /// See `statistic`.
+    pub critical: f64,
+}
+
+/// Every channel's trend point of an `ok` run, keyed by (MV index, CV index).
+pub fn trend_points(report: &RunReport) -> Vec<((usize, usize), TrendPoint)> {
+    if report.status != RunStatus::Ok {
+        return Vec::new();
+    }
+    report
+        .channels
+        .iter()
+        .map(|ch| {
+            let point = TrendPoint {
+                time: report.time.clone(),
+                p_value: ch.p_value,
+                significant: ch.significant,
+                statistic: ch.statistic.clone(),
+                value: ch.statistic_bits,
+                critical: ch.statistic_critical_bits,
+            };
+            ((ch.mv_index, ch.cv_index), point)
+        })
+        .collect()
 }
 
 /// The profile of one channel of a report.
@@ -305,6 +360,22 @@ pub fn profile(report: &RunReport, ch: &ChannelSummary) -> Option<Profile> {
         norm_critical_bits: bits(p.threshold.critical),
         ccf: cell.ccf.values.clone(),
         ccf_limit: cell.ccf.limit,
+        ccf_critical: cell.family.as_ref().and_then(|t| {
+            let c = t.profiles.iter().find(|p| p.statistic == Statistic::Ccf)?;
+            Some(c.mean.iter().zip(&c.std).map(|(m, sd)| m.abs() + t.critical_z * sd).collect())
+        }),
+        joint_bits: cell
+            .family
+            .as_ref()
+            .and(cell.joint.as_ref())
+            .map(|j| j.profile.iter().map(|v| bits(*v)).collect()),
+        joint_critical_bits: cell
+            .family
+            .as_ref()
+            .and(cell.joint.as_ref())
+            .map(|j| j.lag_critical.iter().map(|v| bits(*v)).collect()),
+        p_value: cell.decision.p_value,
+        alpha: cell.decision.alpha,
         time: report.time.clone(),
     })
 }

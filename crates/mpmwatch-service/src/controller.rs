@@ -15,6 +15,9 @@ use super::window::Window;
 /// Alarm events kept in memory per controller (the store keeps them all).
 const HISTORY: usize = 500;
 
+/// Runs kept per channel for the trend (memory only: an hour at `every = 10`).
+pub const TREND: usize = 360;
+
 /// How far past the wall clock a sample time may lie (seconds since the Unix epoch): clocks of
 /// historians drift, but not by a day.
 const FUTURE_SLACK: f64 = 86_400.0;
@@ -63,6 +66,8 @@ pub struct Controller {
     pub latest: Option<Arc<RunReport>>,
     /// Recent alarm events, oldest first.
     pub history: VecDeque<AlarmEvent>,
+    /// Per channel (MV index, CV index): its decision in the recent `ok` runs, oldest first.
+    pub trend: BTreeMap<(usize, usize), VecDeque<super::analysis::TrendPoint>>,
     /// Window rows not yet written to the store (bounded by the window length).
     pub unsaved: VecDeque<WindowRow>,
     /// Samples accepted since start.
@@ -123,6 +128,7 @@ impl Controller {
             debounce: BTreeMap::new(),
             latest: None,
             history: VecDeque::new(),
+            trend: BTreeMap::new(),
             unsaved: VecDeque::new(),
             ingested: 0,
             dropped: HashMap::new(),
@@ -323,6 +329,13 @@ impl Controller {
     pub fn apply(&mut self, report: &RunReport) -> Vec<AlarmEvent> {
         if report.status != RunStatus::Ok {
             return Vec::new();
+        }
+        for (key, point) in super::analysis::trend_points(report) {
+            let t = self.trend.entry(key).or_default();
+            if t.len() == TREND {
+                t.pop_front();
+            }
+            t.push_back(point);
         }
         let mut events = Vec::new();
         for ch in &report.channels {

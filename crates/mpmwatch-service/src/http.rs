@@ -59,6 +59,7 @@ pub fn router(shared: Arc<Shared>, guard: Arc<Guard>) -> Router {
         .route("/api/v1/controllers/{id}/matrix", get(matrix))
         .route("/api/v1/controllers/{id}/alarms", get(alarms))
         .route("/api/v1/controllers/{id}/profile", get(profile))
+        .route("/api/v1/controllers/{id}/trend", get(trend))
         .route("/api/v1/controllers/{id}/run", post(run_now))
         .fallback(|| async { not_found("no such path; see GET /api/v1/controllers".into()) })
         .with_state(shared)
@@ -263,6 +264,44 @@ async fn alarms(
         "controller": id,
         "active": active.iter().map(|(d, cv)| json!({"channel": format!("{d}→{cv}"), "dither": d, "cv": cv})).collect::<Vec<_>>(),
         "history": history,
+    })))
+}
+
+/// The (dither index, CV index) of `?mv=..&cv=..` (an MV or dither tag and a CV tag).
+fn channel_of(s: &Shared, id: &str, q: &HashMap<String, String>) -> Result<(usize, usize), ApiError> {
+    let (Some(mv), Some(cv)) = (q.get("mv"), q.get("cv")) else {
+        return Err(ApiError(
+            StatusCode::BAD_REQUEST,
+            "query parameters mv and cv are required (tags)".into(),
+        ));
+    };
+    let c = s.lock(id).ok_or_else(|| unknown(id))?;
+    let i = c.cfg.mv.iter().position(|t| t == mv).or_else(|| c.cfg.dither.iter().position(|t| t == mv));
+    let j = c.cfg.cv.iter().position(|t| t == cv);
+    match (i, j) {
+        (None, _) => Err(not_found(format!("controller {id:?} has no MV or dither tag {mv:?}"))),
+        (_, None) => Err(not_found(format!("controller {id:?} has no CV tag {cv:?}"))),
+        (Some(i), Some(j)) => Ok((i, j)),
+    }
+}
+
+/// One channel's decisions over the recent runs (memory only, [`crate::controller::TREND`]
+/// runs), with the rule's alpha: the page draws the p-value against it.
+async fn trend(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    Query(q): Query<HashMap<String, String>>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let (i, j) = channel_of(&s, &id, &q)?;
+    let c = s.lock(&id).ok_or_else(|| unknown(&id))?;
+    let points: Vec<_> = c.trend.get(&(i, j)).map(|t| t.iter().cloned().collect()).unwrap_or_default();
+    Ok(Json(json!({
+        "controller": id,
+        "dither": c.cfg.dither[i],
+        "cv": c.cfg.cv[j],
+        "method": c.cfg.method,
+        "alpha": (c.cfg.method == mpmwatch_core::detect::Method::Family).then_some(c.cfg.alpha),
+        "points": points,
     })))
 }
 

@@ -36,6 +36,10 @@ async fn http_api_bodies_and_error_codes() {
         ("/api/v1/controllers/c1/profile?mv=u1&cv=zz", 404),
         ("/api/v1/controllers/c1/profile?mv=u1&cv=y1", 503),
         ("/api/v1/controllers/c1/alarms?limit=abc", 400),
+        ("/api/v1/controllers/nope/trend?mv=u1&cv=y1", 404),
+        ("/api/v1/controllers/c1/trend?mv=u1", 400),
+        ("/api/v1/controllers/c1/trend?mv=zz&cv=y1", 404),
+        ("/api/v1/controllers/c1/trend?mv=u1&cv=zz", 404),
         ("/no/such/path", 404),
     ] {
         let (code, v) = get_json(HTTP, path).await;
@@ -89,6 +93,11 @@ async fn http_api_bodies_and_error_codes() {
         assert!(p["mi_bits"][0].as_f64().unwrap() > p["critical_bits"][0].as_f64().unwrap(), "{p}");
     }
 
+    // The family rule's CCF critical values and p-value come with the profile.
+    let (_, p) = get_json(HTTP, "/api/v1/controllers/c1/profile?mv=ud1&cv=y1").await;
+    assert_eq!(p["ccf_critical"].as_array().map(Vec::len), Some(3), "{p}");
+    assert!(p["p_value"].as_f64().unwrap() <= p["alpha"].as_f64().unwrap(), "{p}");
+
     let (code, a) = get_json(HTTP, "/api/v1/controllers/c1/alarms?limit=5").await;
     assert_eq!(code, 200);
     assert_eq!(a["controller"], "c1");
@@ -97,6 +106,9 @@ async fn http_api_bodies_and_error_codes() {
     let (code, page) = get(HTTP, "/").await;
     assert_eq!(code, 200);
     assert!(page.contains("<html") && page.contains("api/v1/controllers"));
+    for endpoint in ["/profile?", "/trend?", "/alarms?"] {
+        assert!(page.contains(endpoint), "the page draws from {endpoint}");
+    }
 
     let (code, metrics) = get(HTTP, "/metrics").await;
     assert_eq!(code, 200);
@@ -123,6 +135,22 @@ async fn http_api_bodies_and_error_codes() {
     let v: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes()).unwrap();
     assert_eq!(v["status"], "ok");
     assert_eq!(v["channels"].as_array().unwrap().len(), 4);
+
+    // The trend holds one point per ok run (the insufficient one is not a point).
+    let r2 = run_once(&service.shared, "c1").await.unwrap();
+    assert_eq!(r2.status.as_str(), "ok");
+    let (code, t) = get_json(HTTP, "/api/v1/controllers/c1/trend?mv=ud1&cv=y1").await;
+    assert_eq!(code, 200, "{t}");
+    let points = t["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "{t}");
+    assert!(
+        points.iter().all(|pt| pt["significant"] == true && pt["p_value"].as_f64().unwrap() <= 0.001),
+        "{t}"
+    );
+    assert_eq!(t["alpha"], 0.001);
+    let (_, t) = get_json(HTTP, "/api/v1/controllers/c1/trend?mv=u2&cv=y2").await;
+    assert_eq!(t["points"].as_array().unwrap().len(), 2);
+    assert!(t["points"].as_array().unwrap().iter().all(|pt| pt["significant"] == false), "{t}");
 
     let _ = s.close().await;
     service.stop().await;
