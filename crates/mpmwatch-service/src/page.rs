@@ -59,7 +59,8 @@ function chart(xs, series, opt) {
   let lo = opt.ymin != null ? opt.ymin : Math.min(0, ...all), hi = opt.ymax != null ? opt.ymax : Math.max(...all, lo + 1e-12);
   if (hi <= lo) hi = lo + 1;
   hi += (hi - lo) * 0.05;
-  const x0 = Math.min(...xs), x1 = Math.max(...xs, x0 + 1);
+  const pad = (Math.max(...xs) - Math.min(...xs) || 1) / Math.max(xs.length, 2) * 0.7;
+  const x0 = Math.min(...xs) - pad, x1 = Math.max(...xs, x0 + 1) + pad;
   const px = x => L + (x - x0) / (x1 - x0) * (W - L - R), py = y => T + (hi - y) / (hi - lo) * (H - T - B);
   let g = `<svg width="${W}" height="${H}" role="img" aria-label="${esc(opt.title || '')}">`;
   g += `<line x1="${L}" y1="${py(lo)}" x2="${W - R}" y2="${py(lo)}" stroke="#999"/><line x1="${L}" y1="${T}" x2="${L}" y2="${H - B}" stroke="#999"/>`;
@@ -68,7 +69,7 @@ function chart(xs, series, opt) {
     g += `<text x="${L - 4}" y="${py(y) + 4}" text-anchor="end">${opt.fmt ? opt.fmt(y) : y.toPrecision(2)}</text>`;
     g += `<line x1="${L}" y1="${py(y)}" x2="${W - R}" y2="${py(y)}" stroke="#eee"/>`;
   }
-  const step = Math.max(1, Math.ceil(xs.length / 8));
+  const step = Math.max(1, Math.ceil(xs.length / (opt.ticks || 8)));
   xs.forEach((x, k) => { if (k % step === 0) g += `<text x="${px(x)}" y="${H - B + 14}" text-anchor="middle">${opt.xfmt ? opt.xfmt(x, k) : x}</text>`; });
   g += `<text x="${(L + W - R) / 2}" y="${H - 2}" text-anchor="middle">${esc(opt.xlabel || '')}</text>`;
   const bw = Math.max(2, (W - L - R) / xs.length * 0.6);
@@ -83,8 +84,8 @@ function chart(xs, series, opt) {
       g += `<polyline points="${pts}" fill="none" stroke="${s.colour}" stroke-width="1.5"${s.dash ? ' stroke-dasharray="4 3"' : ''}/>`;
     }
   }
-  const legend = series.filter(s => s.label).map((s, k) => `<tspan fill="${s.colour}" x="${L + 6}" dy="${k ? 13 : 0}">${s.kind === 'line' && s.dash ? '- -' : '■'} ${esc(s.label)}</tspan>`).join('');
-  return g + `<text x="${L + 6}" y="${T + 10}">${legend}</text></svg>`;
+  const legend = series.filter(s => s.label).map((s, k) => `<tspan fill="${s.colour}" x="${W - R - 4}" dy="${k ? 13 : 0}">${s.kind === 'line' && s.dash ? '- -' : '■'} ${esc(s.label)}</tspan>`).join('');
+  return g + `<text x="${W - R - 4}" y="${T + 10}" text-anchor="end" style="paint-order: stroke; stroke: #fafafa; stroke-width: 3px">${legend}</text></svg>`;
 }
 async function detail(c, m) {
   const ch = m.channels.find(x => x.dither === sel[c.id].dither && x.cv === sel[c.id].cv);
@@ -112,7 +113,7 @@ async function detail(c, m) {
       const series = [{ys, kind: 'dots', colour: '#888', colours: t.points.map(pt => pt.significant ? '#c33' : '#888'), label: '−log10 p per run'}];
       if (t.alpha) series.push({ys: xs.map(() => -Math.log10(t.alpha)), kind: 'line', colour: '#c33', dash: true, label: `alpha = ${t.alpha}`});
       const times = t.points.map(pt => pt.time.slice(11, 19));
-      h += `<div class="panel"><h3>trend: last ${t.points.length} runs</h3>` + chart(xs, series, {xlabel: 'run time (UTC)', title: 'p-value trend', ymin: 0, xfmt: (x, k) => times[k]}) + '</div>';
+      h += `<div class="panel"><h3>trend: last ${t.points.length} runs</h3>` + chart(xs, series, {xlabel: 'run time (UTC)', title: 'p-value trend', ymin: 0, ticks: 4, xfmt: (x, k) => times[k]}) + '</div>';
     }
   }
   if (al.ok) {
