@@ -14,7 +14,7 @@ use crate::info::{
 
 use super::partial::PartialPlan;
 use super::verdict::{Channel, localise};
-use super::whiten::ArWhitener;
+use super::whiten::{ArWhitener, drop_segment_heads};
 
 /// A named series.
 #[derive(Debug, Clone, Copy)]
@@ -337,8 +337,29 @@ pub fn analyze(
     opts: &MatrixOptions,
 ) -> Result<MatrixResult, InfoError> {
     let n = dithers.first().map_or(0, |d| d.values.len());
+    analyze_segments(dithers, residuals, &[n], opts)
+}
+
+/// [`analyze`] on a record with gaps, given as contiguous segments of lengths `segments` laid
+/// end to end in every signal. Partialling-out, whitening and every lagged statistic stay inside
+/// a segment: a regression row, an AR prediction or a lagged pair that would reach across a gap
+/// is skipped, so the data before a gap count without a pair ever straddling it.
+pub fn analyze_segments(
+    dithers: &[Signal<'_>],
+    residuals: &[Signal<'_>],
+    segments: &[usize],
+    opts: &MatrixOptions,
+) -> Result<MatrixResult, InfoError> {
+    let n = dithers.first().map_or(0, |d| d.values.len());
     check_signals("dithers", dithers, n)?;
     check_signals("residuals", residuals, n)?;
+    if segments.iter().sum::<usize>() != n || segments.contains(&0) {
+        return Err(InfoError::InvalidParameter {
+            name: "segments",
+            value: format!("{segments:?}"),
+            reason: "the segment lengths must be positive and add up to the signals' length",
+        });
+    }
     for r in residuals {
         crate::info::validate::not_constant(r.name, r.values)?;
     }
@@ -350,7 +371,7 @@ pub fn analyze(
     let whitening: Vec<ArWhitener> = residuals
         .iter()
         .map(|r| match opts.whiten {
-            Some(max) => ArWhitener::fit(r.values, max),
+            Some(max) => ArWhitener::fit_segments(r.values, segments, max),
             None => ArWhitener { coefficients: Vec::new(), variance_ratio: 1.0 },
         })
         .collect();
@@ -377,7 +398,7 @@ pub fn analyze(
     cuts.sort_unstable();
     cuts.dedup();
     let plans: Vec<(usize, PartialPlan)> =
-        cuts.par_iter().map(|&c| (c, PartialPlan::new(&dither_values, &excited, c))).collect();
+        cuts.par_iter().map(|&c| (c, PartialPlan::new(&dither_values, &excited, c, segments))).collect();
     let plan_of = |cut: usize| plans.iter().find(|(c, _)| *c == cut).map(|(_, p)| p);
     let fits: Vec<Option<Vec<f64>>> = (0..residuals.len())
         .into_par_iter()
@@ -389,19 +410,23 @@ pub fn analyze(
             // Partial out the other dithers, then whiten what is left with an AR model fitted
             // to it (the per-residual whitener is reported; the per-element refit differs only
             // by the removed dither-driven part).
-            let cut = cut_of(j);
-            let cleaned = match plan_of(cut) {
-                Some(plan) => plan.partial_out(residuals[j].values, fits[j].as_deref(), i),
-                None => residuals[j].values.to_vec(),
+            let (cleaned, d_clean, segs1) = match plan_of(cut_of(j)) {
+                Some(plan) => (
+                    plan.partial_out(residuals[j].values, fits[j].as_deref(), i),
+                    plan.on_rows(dithers[i].values),
+                    plan.segments().to_vec(),
+                ),
+                None => (residuals[j].values.to_vec(), dithers[i].values.to_vec(), segments.to_vec()),
             };
             let w = match opts.whiten {
-                Some(max) => ArWhitener::fit(&cleaned, max),
+                Some(max) => ArWhitener::fit_segments(&cleaned, &segs1, max),
                 None => ArWhitener { coefficients: Vec::new(), variance_ratio: 1.0 },
             };
-            let white = w.apply(&cleaned);
-            let d = Signal { name: dithers[i].name, values: &dithers[i].values[cut + w.order()..] };
+            let (white, segs) = w.apply_segments(&cleaned, &segs1);
+            let (d_white, _) = drop_segment_heads(&d_clean, &segs1, w.order());
+            let d = Signal { name: dithers[i].name, values: &d_white };
             let r = Signal { name: residuals[j].name, values: &white };
-            cell(&d, &r, i, j, lags[j], opts)
+            cell(&d, &r, i, j, lags[j], &segs, opts)
         })
         .collect::<Result<Vec<_>, _>>()?;
     let channels = localise(&cells, &excited, dithers, residuals);
@@ -428,19 +453,26 @@ fn cell(
     mv: usize,
     cv: usize,
     lags: Lags,
+    segments: &[usize],
     opts: &MatrixOptions,
 ) -> Result<Cell, InfoError> {
     let sur =
         SurrogateOptions { seed: opts.surrogates.seed + 1000 * cv as u64 + mv as u64, ..opts.surrogates };
-    let pair = LaggedPair::new(d.values, r.values, lags, 1, &opts.mi)?;
+    let pair = LaggedPair::segmented(d.values, r.values, lags, 1, &opts.mi, segments)?;
     let pair2 = if opts.joint_embedding {
-        Some(LaggedPair::new(d.values, r.values, lags, 2, &opts.mi)?)
+        Some(LaggedPair::segmented(d.values, r.values, lags, 2, &opts.mi, segments)?)
     } else {
         None
     };
-    let ccf_values = ccf(d.values, r.values, lags.min as i64..=lags.max as i64)?;
+    // With gaps, the CCF over the pair set (which never straddles one); without, the whole
+    // record's 1/N form, as before.
+    let (ccf_values, n_ccf) = if segments.len() > 1 {
+        (pair.linear_profile_shifted(0), pair.n_pairs())
+    } else {
+        (ccf(d.values, r.values, lags.min as i64..=lags.max as i64)?, d.values.len())
+    };
     let z = family_wise_z(opts.ccf_alpha, lags.len());
-    let limit = ccf_limit(d.values.len(), z);
+    let limit = ccf_limit(n_ccf, z);
     let p = pearson(d.values, r.values, family_wise_z(opts.ccf_alpha, 1))?;
     let ccf = CcfBaseline {
         lags: lags.iter().collect(),
@@ -448,7 +480,7 @@ fn cell(
         values: ccf_values,
         limit,
         z,
-        n: d.values.len(),
+        n: n_ccf,
         pearson_r: p.r,
         pearson_limit: p.limit,
     };

@@ -10,8 +10,8 @@ mod whiten;
 
 pub use matrix::{
     CcfBaseline, Cell, Decision, ElementTest, Evidence, LagChoice, MatrixOptions, MatrixResult, Method,
-    Signal, analyze,
+    Signal, analyze, analyze_segments,
 };
-pub use partial::partial_out;
+pub use partial::{PartialPlan, partial_out};
 pub use verdict::{Channel, Verdict, localise};
 pub use whiten::ArWhitener;

@@ -27,11 +27,25 @@ pub struct ArWhitener {
 impl ArWhitener {
     /// Fits an AR model of order 0..=`max_order` (AIC) to `e`.
     pub fn fit(e: &[f64], max_order: usize) -> Self {
+        Self::fit_segments(e, &[e.len()], max_order)
+    }
+
+    /// [`ArWhitener::fit`] on a record of contiguous segments laid end to end (lengths
+    /// `segments`): the autocovariances use only products within a segment.
+    pub fn fit_segments(e: &[f64], segments: &[usize], max_order: usize) -> Self {
         let n = e.len();
         let mean = e.iter().sum::<f64>() / n as f64;
-        let max_order = max_order.min(n / 4);
+        let max_order = max_order.min(segments.iter().copied().max().unwrap_or(0) / 4);
+        let starts = segment_starts(segments);
         let r: Vec<f64> = (0..=max_order)
-            .map(|k| (k..n).map(|t| (e[t] - mean) * (e[t - k] - mean)).sum::<f64>() / n as f64)
+            .map(|k| {
+                starts
+                    .iter()
+                    .zip(segments)
+                    .map(|(&s, &len)| (s + k..s + len).map(|t| (e[t] - mean) * (e[t - k] - mean)).sum::<f64>())
+                    .sum::<f64>()
+                    / n as f64
+            })
             .collect();
         if r[0] <= 0.0 {
             return Self { coefficients: Vec::new(), variance_ratio: 1.0 };
@@ -73,6 +87,47 @@ impl ArWhitener {
             .map(|t| e[t] - self.coefficients.iter().enumerate().map(|(k, a)| a * e[t - 1 - k]).sum::<f64>())
             .collect()
     }
+
+    /// [`ArWhitener::apply`] segment by segment: each loses its first `p` samples (a segment
+    /// no longer than `p` disappears). Returns the output and its segment lengths.
+    pub fn apply_segments(&self, e: &[f64], segments: &[usize]) -> (Vec<f64>, Vec<usize>) {
+        let mut out = Vec::with_capacity(e.len());
+        let mut lens = Vec::new();
+        for (&s, &len) in segment_starts(segments).iter().zip(segments) {
+            let w = self.apply(&e[s..s + len]);
+            if !w.is_empty() {
+                lens.push(w.len());
+                out.extend(w);
+            }
+        }
+        (out, lens)
+    }
+}
+
+/// Where each segment starts in the record laid end to end.
+pub(crate) fn segment_starts(segments: &[usize]) -> Vec<usize> {
+    segments
+        .iter()
+        .scan(0, |acc, &len| {
+            let s = *acc;
+            *acc += len;
+            Some(s)
+        })
+        .collect()
+}
+
+/// The samples of `x` (laid out in segments `segments`) left after dropping the first `cut` of
+/// each segment, and the new segment lengths.
+pub(crate) fn drop_segment_heads(x: &[f64], segments: &[usize], cut: usize) -> (Vec<f64>, Vec<usize>) {
+    let mut out = Vec::with_capacity(x.len());
+    let mut lens = Vec::new();
+    for (&s, &len) in segment_starts(segments).iter().zip(segments) {
+        if len > cut {
+            out.extend_from_slice(&x[s + cut..s + len]);
+            lens.push(len - cut);
+        }
+    }
+    (out, lens)
 }
 
 #[cfg(test)]

@@ -2,7 +2,9 @@
 
 use crate::common;
 
-use mpmwatch_core::detect::{Evidence, LagChoice, MatrixOptions, Method, Signal, Verdict, analyze};
+use mpmwatch_core::detect::{
+    Evidence, LagChoice, MatrixOptions, Method, Signal, Verdict, analyze, analyze_segments,
+};
 use mpmwatch_core::info::{Lags, SurrogateOptions};
 
 fn opts(seed: u64) -> MatrixOptions {
@@ -155,4 +157,38 @@ fn independent_matrices_rarely_alarm_under_the_family_rule() {
         ..opts(seed)
     });
     assert!(alarmed <= 2, "{alarmed} of 30 independent matrices alarmed");
+}
+
+/// A gap of 40 rows in the middle: the analysis in segments uses both sides (about 1 950
+/// pairs, not the 1 000 after the gap) and reaches the decisions of the same data without the
+/// gap: only (e1, ud1), a linear effect at lag 3, is a mismatch.
+#[test]
+fn a_gap_keeps_the_data_before_it_and_the_decisions_of_the_whole_record() {
+    let mut rng = common::rng(43);
+    let n = 2047;
+    let ud1 = common::binary(&mut rng, n);
+    let ud2 = common::binary(&mut rng, n);
+    let v1 = common::ar1(&mut rng, n, 0.8);
+    let v2 = common::ar1(&mut rng, n, 0.5);
+    let e1: Vec<f64> = (0..n).map(|t| v1[t] + if t >= 3 { 0.15 * ud1[t - 3] } else { 0.0 }).collect();
+    let whole = {
+        let d = [Signal { name: "ud1", values: &ud1 }, Signal { name: "ud2", values: &ud2 }];
+        let r = [Signal { name: "e1", values: &e1 }, Signal { name: "e2", values: &v2 }];
+        analyze(&d, &r, &opts(7)).unwrap()
+    };
+    let cut = |x: &[f64]| -> Vec<f64> { x[..1000].iter().chain(&x[1040..]).copied().collect() };
+    let (g1, g2, ge1, ge2) = (cut(&ud1), cut(&ud2), cut(&e1), cut(&v2));
+    let d = [Signal { name: "ud1", values: &g1 }, Signal { name: "ud2", values: &g2 }];
+    let r = [Signal { name: "e1", values: &ge1 }, Signal { name: "e2", values: &ge2 }];
+    let gapped = analyze_segments(&d, &r, &[1000, 1007], &opts(7)).unwrap();
+    for (a, b) in whole.channels.iter().zip(&gapped.channels) {
+        assert_eq!(a.verdict, b.verdict, "{} -> {}: {} / {}", a.mv, a.cv, a.reason, b.reason);
+    }
+    assert_eq!(gapped.channels.iter().filter(|c| c.verdict == Verdict::Mismatch).count(), 1);
+    assert!(gapped.cell(0, 0).unwrap().significant);
+    // Pairs: 2 007 rows less, per segment, 5 partialling rows, the whitening order (≤ 10) and
+    // 5 lags: between 2 007 − 2·20 and 2 007 − 2·10.
+    let pairs = gapped.cell(0, 0).unwrap().ccf.n;
+    assert!((2007 - 40..=2007 - 20).contains(&pairs), "{pairs}");
+    assert!(analyze_segments(&d, &r, &[1000, 1000], &opts(7)).is_err(), "segments must cover the record");
 }
