@@ -98,6 +98,9 @@ pub struct RunReport {
     pub first_time: Option<f64>,
     /// See `first_time`.
     pub last_time: Option<f64>,
+    /// Stretches without a gap analysed together (pairs never straddle a gap); 0 when not
+    /// analysed.
+    pub segments: usize,
     /// Any channel significant (Proposition 1).
     pub mismatch: bool,
     /// MV tags.
@@ -153,6 +156,7 @@ impl RunReport {
             needed: c.min_samples,
             first_time: None,
             last_time: None,
+            segments: 0,
             mismatch: false,
             mv: c.mv.clone(),
             dither: c.dither.clone(),
@@ -170,10 +174,12 @@ impl RunReport {
     pub fn insufficient(c: &ControllerConfig, why: Insufficient, time: String) -> Self {
         Self {
             message: Some(format!(
-                "{} contiguous samples, {} needed: not analysed",
-                why.contiguous, why.needed
+                "{} usable samples (in stretches without a gap of at least {} samples), {} needed: not analysed",
+                why.usable,
+                min_segment(c),
+                why.needed
             )),
-            n: why.contiguous,
+            n: why.usable,
             ..Self::empty(c, RunStatus::InsufficientData, time)
         }
     }
@@ -189,6 +195,13 @@ impl RunReport {
     }
 }
 
+/// The shortest stretch without a gap worth analysing: each loses `lag_max` rows to the
+/// partialling-out, up to 10 to the whitening and `lag_max` to the lags, and should keep at
+/// least 16 pairs beyond that.
+pub fn min_segment(c: &ControllerConfig) -> usize {
+    2 * c.lag_max + 10 + 16
+}
+
 /// Analyses a snapshot. Never panics on data: estimator errors become `status: error`.
 pub fn run(c: &ControllerConfig, snap: &Snapshot, time: String) -> RunReport {
     let dithers: Vec<Signal<'_>> =
@@ -199,9 +212,10 @@ pub fn run(c: &ControllerConfig, snap: &Snapshot, time: String) -> RunReport {
         n: snap.dither.first().map_or(0, Vec::len),
         first_time: Some(snap.first_slot as f64 * c.period),
         last_time: Some(snap.last_slot as f64 * c.period),
+        segments: snap.segments.len(),
         ..RunReport::empty(c, RunStatus::Ok, time)
     };
-    match detect::analyze(&dithers, &residuals, &options(c)) {
+    match detect::analyze_segments(&dithers, &residuals, &snap.segments, &options(c)) {
         Ok(result) => RunReport {
             mismatch: result.mismatch,
             channels: summarise(c, &result),

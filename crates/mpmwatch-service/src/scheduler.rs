@@ -89,7 +89,7 @@ pub async fn run_once(shared: &Arc<Shared>, id: &str) -> Option<Arc<RunReport>> 
         let ticked = ctl.tick();
         let (fill, contiguous) = (ctl.window.fill(), ctl.window.contiguous_tail());
         super::ingest::record(shared, id, &ticked, fill, contiguous);
-        (ctl.cfg.clone(), ctl.window.snapshot(ctl.cfg.min_samples))
+        (ctl.cfg.clone(), ctl.window.snapshot(ctl.cfg.min_samples, super::analysis::min_segment(&ctl.cfg)))
     };
     let time = now_rfc3339();
     let report = match snap {
@@ -100,11 +100,8 @@ pub async fn run_once(shared: &Arc<Shared>, id: &str) -> Option<Arc<RunReport>> 
             let t = time.clone();
             let joined = tokio::task::spawn_blocking(move || analysis::run(&c, &snap, t)).await;
             let mut r = joined.unwrap_or_else(|e| {
-                let mut r = RunReport::insufficient(
-                    &cfg,
-                    super::window::Insufficient { contiguous: 0, needed: 0 },
-                    time,
-                );
+                let mut r =
+                    RunReport::insufficient(&cfg, super::window::Insufficient { usable: 0, needed: 0 }, time);
                 r.status = RunStatus::Error;
                 r.message = Some(format!("analysis failed: {e}"));
                 r

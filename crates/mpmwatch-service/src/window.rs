@@ -12,8 +12,9 @@ pub struct Window {
     rows: VecDeque<WindowRow>,
 }
 
-/// The data one analysis runs on: the most recent contiguous stretch of the window, so that no
-/// lagged pair straddles a gap.
+/// The data one analysis runs on: every stretch of the window without a gap that is long
+/// enough to hold lagged pairs, laid end to end with their lengths, so that the analysis can
+/// keep every pair inside one stretch (`detect::analyze_segments`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
     /// First slot.
@@ -24,13 +25,15 @@ pub struct Snapshot {
     pub dither: Vec<Vec<f64>>,
     /// Residual series, one per CV.
     pub residual: Vec<Vec<f64>>,
+    /// Lengths of the contiguous stretches, oldest first (they sum to the series' length).
+    pub segments: Vec<usize>,
 }
 
-/// Not enough contiguous rows for an analysis.
+/// Not enough usable rows for an analysis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Insufficient {
-    /// Contiguous rows at the end of the window.
-    pub contiguous: usize,
+    /// Rows in stretches without a gap of at least the shortest useful length.
+    pub usable: usize,
     /// Rows needed.
     pub needed: usize,
 }
@@ -130,19 +133,32 @@ impl Window {
         n
     }
 
-    /// Copies the contiguous tail if it has at least `needed` rows.
-    pub fn snapshot(&self, needed: usize) -> Result<Snapshot, Insufficient> {
-        let n = self.contiguous_tail();
-        if n < needed || n == 0 {
-            return Err(Insufficient { contiguous: n, needed });
+    /// Copies every stretch without a gap of at least `min_segment` rows, if together they
+    /// hold at least `needed` rows (shorter stretches cannot hold a lagged pair after the
+    /// analysis trims their heads, so they are left out).
+    pub fn snapshot(&self, needed: usize, min_segment: usize) -> Result<Snapshot, Insufficient> {
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        let mut start = 0;
+        for k in 1..=self.rows.len() {
+            if k == self.rows.len() || self.rows[k].slot != self.rows[k - 1].slot + 1 {
+                if k - start >= min_segment.max(1) {
+                    runs.push((start, k));
+                }
+                start = k;
+            }
         }
-        let tail: Vec<&WindowRow> = self.rows.iter().skip(self.rows.len() - n).collect();
-        let (nd, nr) = (tail[0].dither.len(), tail[0].residual.len());
+        let usable: usize = runs.iter().map(|(a, b)| b - a).sum();
+        if usable < needed || usable == 0 {
+            return Err(Insufficient { usable, needed });
+        }
+        let rows: Vec<&WindowRow> = runs.iter().flat_map(|&(a, b)| self.rows.range(a..b)).collect();
+        let (nd, nr) = (rows[0].dither.len(), rows[0].residual.len());
         Ok(Snapshot {
-            first_slot: tail[0].slot,
-            last_slot: tail[n - 1].slot,
-            dither: (0..nd).map(|i| tail.iter().map(|r| r.dither[i]).collect()).collect(),
-            residual: (0..nr).map(|j| tail.iter().map(|r| r.residual[j]).collect()).collect(),
+            first_slot: rows[0].slot,
+            last_slot: rows[rows.len() - 1].slot,
+            dither: (0..nd).map(|i| rows.iter().map(|r| r.dither[i]).collect()).collect(),
+            residual: (0..nr).map(|j| rows.iter().map(|r| r.residual[j]).collect()).collect(),
+            segments: runs.iter().map(|(a, b)| b - a).collect(),
         })
     }
 }
@@ -192,16 +208,21 @@ mod tests {
     }
 
     #[test]
-    fn snapshots_never_straddle_a_gap() {
+    fn snapshots_keep_every_long_enough_stretch_and_say_where_the_gaps_are() {
         let mut w = Window::new(100);
         for s in (0..20).chain(25..35) {
             w.push(row(s));
         }
         assert_eq!(w.contiguous_tail(), 10);
-        let s = w.snapshot(10).unwrap();
-        assert_eq!((s.first_slot, s.last_slot), (25, 34));
-        assert_eq!(s.dither[0], (25..35).map(|v| v as f64).collect::<Vec<_>>());
-        assert_eq!(w.snapshot(11), Err(Insufficient { contiguous: 10, needed: 11 }));
-        assert_eq!(Window::new(5).snapshot(1), Err(Insufficient { contiguous: 0, needed: 1 }));
+        // Both stretches, laid end to end, with their lengths.
+        let s = w.snapshot(30, 5).unwrap();
+        assert_eq!((s.first_slot, s.last_slot, s.segments.clone()), (0, 34, vec![20, 10]));
+        assert_eq!(s.dither[0], (0..20).chain(25..35).map(|v| v as f64).collect::<Vec<_>>());
+        // A stretch shorter than the minimum is left out.
+        let s = w.snapshot(10, 15).unwrap();
+        assert_eq!((s.first_slot, s.segments.clone()), (0, vec![20]));
+        assert_eq!(w.snapshot(31, 5), Err(Insufficient { usable: 30, needed: 31 }));
+        assert_eq!(w.snapshot(25, 15), Err(Insufficient { usable: 20, needed: 25 }));
+        assert_eq!(Window::new(5).snapshot(1, 1), Err(Insufficient { usable: 0, needed: 1 }));
     }
 }

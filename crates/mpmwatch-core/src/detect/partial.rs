@@ -186,7 +186,9 @@ mod tests {
             (0..n).map(|t| if (t * (31 + 6 * k) + t / (3 + k) + k) % 7 < 3 { 1.0 } else { -1.0 }).collect()
         };
         let d: Vec<Vec<f64>> = (0..2).map(bin).collect();
-        let e: Vec<f64> = (0..n).map(|t| ((t * 7919) % 101) as f64 / 50.0 + if t >= 1 { d[1][t - 1] } else { 0.0 }).collect();
+        let e: Vec<f64> = (0..n)
+            .map(|t| ((t * 7919) % 101) as f64 / 50.0 + if t >= 1 { d[1][t - 1] } else { 0.0 })
+            .collect();
         let refs: Vec<&[f64]> = d.iter().map(Vec::as_slice).collect();
         let plan = PartialPlan::new(&refs, &[true, true], 2, &[250, 150]);
         assert_eq!(plan.segments(), &[248, 148]);

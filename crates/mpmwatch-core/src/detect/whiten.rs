@@ -42,7 +42,9 @@ impl ArWhitener {
                 starts
                     .iter()
                     .zip(segments)
-                    .map(|(&s, &len)| (s + k..s + len).map(|t| (e[t] - mean) * (e[t - k] - mean)).sum::<f64>())
+                    .map(|(&s, &len)| {
+                        (s + k..s + len).map(|t| (e[t] - mean) * (e[t - k] - mean)).sum::<f64>()
+                    })
                     .sum::<f64>()
                     / n as f64
             })

@@ -189,7 +189,11 @@ impl<'a> LaggedPair<'a> {
             let t0 = width - 1;
             let used: Vec<bool> = (t0..t0 + pair.n_pairs).map(|t| id[t - t0] == id[t + lags.max]).collect();
             pair.n_pairs = used.iter().filter(|&&u| u).count();
-            validate::neighbours(&format!("lagged MI up to lag {} within segments", lags.max), pair.n_pairs, opts.k)?;
+            validate::neighbours(
+                &format!("lagged MI up to lag {} within segments", lags.max),
+                pair.n_pairs,
+                opts.k,
+            )?;
             pair.used = Some(used);
         }
         Ok(pair)
@@ -314,10 +318,15 @@ impl<'a> LaggedPair<'a> {
         let np = self.n_pairs;
         if self.used.is_none() {
             let cols: Vec<&[f64]> = (0..self.width).map(|d| &x[t0 - d..t0 - d + np]).collect();
-            return self.lags.iter().map(|tau| ksg1(&cols, &self.y[t0 + tau..t0 + tau + np], self.k)).collect();
+            return self
+                .lags
+                .iter()
+                .map(|tau| ksg1(&cols, &self.y[t0 + tau..t0 + tau + np], self.k))
+                .collect();
         }
         let times = self.times();
-        let cols: Vec<Vec<f64>> = (0..self.width).map(|d| times.iter().map(|&t| x[t - d]).collect()).collect();
+        let cols: Vec<Vec<f64>> =
+            (0..self.width).map(|d| times.iter().map(|&t| x[t - d]).collect()).collect();
         let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
         self.lags
             .iter()
@@ -456,7 +465,13 @@ mod tests {
                 assert!((prof.nats[i] - direct).abs() < 1e-9, "lag {tau}: {} vs {direct}", prof.nats[i]);
             }
             let r = pair.linear_profile_shifted(0);
-            let direct_r = crate::info::correlation::pearson(&xs, &times.iter().map(|&t| y[t + 1]).collect::<Vec<_>>(), 2.0).unwrap().r;
+            let direct_r = crate::info::correlation::pearson(
+                &xs,
+                &times.iter().map(|&t| y[t + 1]).collect::<Vec<_>>(),
+                2.0,
+            )
+            .unwrap()
+            .r;
             // The profile normalises by the whole series' moments, Pearson by the used times':
             // 544 of 550 samples, so the two differ by well under 0.01 here.
             assert!((r[0] - direct_r).abs() < 0.01, "{} vs {direct_r}", r[0]);

@@ -107,6 +107,15 @@ async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
     assert_eq!(count(&v, "time_jumps"), 0);
     let (_, m) = get(http, "/metrics").await;
     assert!(m.contains("mpm_gap_rows_total{controller=\"c1\"} 40"), "{m}");
+
+    // 100 more rows: the stretch after the gap (150) is still under min_samples (200), but the
+    // analysis uses both stretches, each pair inside one.
+    toy.publish(&p, 100, true).await;
+    until("rows after the gap", || async { (count(&status(http).await, "window_len") == 250).then_some(()) })
+        .await;
+    let r = run_once(&service.shared, "c1").await.expect("a run");
+    assert_eq!(r.status.as_str(), "ok", "{:?}", r.message);
+    assert_eq!((r.n, r.segments), (250, 2));
     let _ = p.close().await;
     service.stop().await;
 }
