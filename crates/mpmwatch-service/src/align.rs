@@ -528,7 +528,7 @@ impl Residuals {
     }
 
     /// Whether residuals come from a model (and back-fill needs [`Residuals::recompute`]).
-    pub fn from_model_mode(&self) -> bool {
+    pub fn uses_model(&self) -> bool {
         self.model.is_some()
     }
 

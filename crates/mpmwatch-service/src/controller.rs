@@ -254,7 +254,7 @@ impl Controller {
                 self.push_row(w);
             }
         }
-        if backfilled && self.residuals.from_model_mode() {
+        if backfilled && self.residuals.uses_model() {
             self.residuals.recompute(self.window.rows_mut());
             self.unsaved = self.window.rows().cloned().collect();
         }

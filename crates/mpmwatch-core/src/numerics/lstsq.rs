@@ -296,7 +296,7 @@ mod tests {
     fn block_least_squares_refuses_a_collinear_design() {
         let a: Vec<f64> = (0..30).map(|t| (t as f64 * 0.3).sin()).collect();
         assert!(BlockLeastSquares::new(&[&a, &a], vec![0..1, 1..2], 0..30).is_none());
-        assert!(BlockLeastSquares::new(&[&a], vec![0..1], 0..0).is_none());
+        assert!(BlockLeastSquares::new(&[&a], std::iter::once(0..1).collect(), 0..0).is_none());
     }
 
     #[test]
