@@ -264,7 +264,14 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             (fit, edges[k]..edges[k + 1])
         })
         .collect();
-    let split = Split { features, fit: w0..n_fit, validate: n_fit..n_train, train: w0..n_train, folds };
+    let mut split = Split {
+        features,
+        fit: w0..n_fit,
+        validate: n_fit..n_train,
+        train: w0..n_train,
+        folds,
+        closed_loop: false,
+    };
 
     let residuals: Vec<Vec<f64>> = input
         .outputs
@@ -313,6 +320,16 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         }
         None => u_all.iter().map(|u| u.to_vec()).collect(),
     };
+    // Closed loop only when some input holds more than its excitations explain: an input that
+    // is its own excitation (or a lagged linear image of the excitations) has no feedback path,
+    // and there the plain validation FIT must rise for a finding, as in open loop.
+    split.closed_loop = input.excitations.is_some()
+        && u_all.iter().zip(&u_driven).any(|(u, d)| {
+            let rows = split.train.clone();
+            let var = |v: &[f64]| mpmwatch_core::numerics::std_dev(&v[rows.clone()], 0).powi(2);
+            let rest: Vec<f64> = u.iter().zip(d).map(|(a, b)| a - b).collect();
+            var(&rest) > CLOSED_LOOP_SHARE * var(u)
+        });
     // The context (nominal model, channels) of every testable output, and the dither-projection
     // test of every element (see `locate`): a second way for a channel to be flagged.
     let mut ctxs: Vec<OutputCtx> = testable
@@ -466,6 +483,10 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     Ok(Diagnosis { report, corrected, matrix })
 }
 
+/// Share of an input's variance that its excitations may leave unexplained before the loop
+/// counts as closed: numerical noise only (an input equal to its excitation leaves about 1e-30).
+const CLOSED_LOOP_SHARE: f64 = 1e-6;
+
 /// The median spacing of the time axis; it must increase strictly.
 fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {
     if let Some(k) = time.windows(2).position(|w| w[1] <= w[0]) {
@@ -615,8 +636,8 @@ fn decide(
     // Open loop: the winner must also raise the plain validation FIT. Closed loop: the plain FIT
     // can fall for the true correction (the nominal error partly cancels the disturbance through
     // feedback), so the closed-loop criterion (`opts.scoring`) alone decides.
-    let best = best
-        .filter(|s| split.features.is_some() || val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
+    let best =
+        best.filter(|s| split.closed_loop || val_fit(y, ctx, r, s, &val) - null_fit >= opts.min_gain_pct);
     let out_name = input.outputs[j].name;
     if let Some(f) = best.and_then(|b| b.fitted.clone()) {
         // Refit the chosen hypothesis (its grid values fixed) on the whole training part.

@@ -78,6 +78,10 @@ pub struct Split {
     pub folds: Vec<(Vec<usize>, std::ops::Range<usize>)>,
     /// The whole training part (the final refit).
     pub train: std::ops::Range<usize>,
+    /// Some input moves with more than its excitations (a controller acts on it): the plain
+    /// validation FIT is then not the criterion (see `decide`). False in open loop, and when
+    /// the excitations given are the inputs themselves.
+    pub closed_loop: bool,
 }
 
 /// Fits one term's coefficients on `rows` against the residual `r`.

@@ -110,10 +110,12 @@ fn power(dir: &std::path::Path, seed: u64, scale: f64) -> anyhow::Result<()> {
     for (shape, dither) in families {
         let rows: Vec<&power::PowerRow> =
             summary.power.iter().filter(|r| r.shape == shape && r.dither == dither).collect();
-        let series = |label: &str, f: &dyn Fn(&power::PowerRow) -> power::Rate| XySeries {
-            label: label.to_string(),
-            points: rows.iter().map(|r| (r.size, 100.0 * f(r).value())).collect(),
-            error: Some(rows.iter().map(|r| 50.0 * (f(r).high - f(r).low)).collect()),
+        let series = |label: &str, f: &dyn Fn(&power::PowerRow) -> power::Rate| {
+            XySeries::points(
+                label,
+                rows.iter().map(|r| (r.size, 100.0 * f(r).value())).collect(),
+                Some(rows.iter().map(|r| 50.0 * (f(r).high - f(r).low)).collect()),
+            )
         };
         let name = format!(
             "{}_{}",

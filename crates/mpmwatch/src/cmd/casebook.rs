@@ -203,16 +203,16 @@ fn case_figure(
     c: &[f64],
     holdout: usize,
 ) -> anyhow::Result<()> {
-    let start = holdout.max(y.len().saturating_sub(200)).min(y.len());
-    let time: Vec<f64> = (start..y.len()).map(|k| k as f64).collect();
+    let time: Vec<f64> = (0..y.len()).map(|k| k as f64).collect();
     crate::cmd::diagnose::output_figure(
         dir,
         &format!("case_{name}"),
-        &format!("{name}: y{} on held-out data", j + 1),
+        &format!("{name}: y{}", j + 1),
         &time,
-        &y[start..],
-        &s[start..],
-        &c[start..],
+        y,
+        s,
+        c,
+        holdout,
     )
 }
 
@@ -305,11 +305,12 @@ fn real_case(
     crate::cmd::diagnose::output_figure(
         fig,
         &format!("real_{name}"),
-        &format!("{name}: recorded, simulated, corrected"),
+        &format!("{name}: recorded, nominal, corrected"),
         &time,
         &y,
         &s,
         &dg.corrected[0],
+        dg.report.holdout.start_index,
     )?;
     let f = dg.report.findings.first();
     let (fb, fa) = (dg.report.holdout.fit_before_pct["y"], dg.report.holdout.fit_after_pct["y"]);

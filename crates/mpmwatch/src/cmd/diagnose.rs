@@ -164,12 +164,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     for f in &dg.report.findings {
         println!("{} → {}: {} — {}", f.input, f.output, f.physics.name(), f.summary);
+        if f.physics == mpmwatch_diagnose::Physics::Unexplained
+            && let Some(best) =
+                f.tried.iter().max_by(|a, b| a.validation_gain_pct.total_cmp(&b.validation_gain_pct))
+        {
+            println!(
+                "  best candidate: {} (validation FIT gain {:+.1} points, within the training part), not reported",
+                best.physics.name(),
+                best.validation_gain_pct
+            );
+        }
     }
     if dg.report.findings.is_empty() {
         println!("no mismatch found (MI matrix all below its critical values)");
     }
     for (k, v) in &dg.report.holdout.fit_before_pct {
-        println!("held-out FIT {k}: {v:.1} % → {:.1} %", dg.report.holdout.fit_after_pct[k]);
+        let after = dg.report.holdout.fit_after_pct[k];
+        let gain = after - v;
+        let verdict = if gain < 0.0 { ": the correction makes the held-out fit WORSE" } else { "" };
+        println!("held-out FIT {k}: {v:.1} % → {after:.1} % (gain {gain:+.1} points){verdict}");
     }
     Ok(())
 }
@@ -199,19 +212,26 @@ pub fn write_outputs(
             output_figure(
                 dir,
                 &format!("diagnose_{n}"),
-                &format!("{n}: recorded, simulated, corrected"),
+                &format!("{n}: recorded, nominal, corrected"),
                 time,
                 &y[j],
                 &s[j],
                 &dg.corrected[j],
+                dg.report.holdout.start_index,
             )?;
         }
     }
     Ok(())
 }
 
-/// A figure of recorded, simulated and corrected output (at most 300 points, the held-out tail
-/// last).
+/// Samples drawn in an output figure: a window a reader can follow sample by sample (at 610 Hz
+/// that is 0.8 s; a whole long record drawn at once, or every k-th sample of it, is a blur).
+const FIGURE_WINDOW: usize = 500;
+
+/// A figure of recorded, simulated (nominal) and corrected output over a window of at most
+/// [`FIGURE_WINDOW`] consecutive samples from the start of the held-out tail, which no fit saw:
+/// plain lines, the nominal dashed.
+#[allow(clippy::too_many_arguments)]
 pub fn output_figure(
     dir: &Path,
     name: &str,
@@ -220,15 +240,19 @@ pub fn output_figure(
     y: &[f64],
     s: &[f64],
     c: &[f64],
+    holdout_start: usize,
 ) -> anyhow::Result<()> {
     let n = time.len();
-    let step = n.div_ceil(300).max(1);
-    let pts = |v: &[f64]| -> Vec<(f64, f64)> { (0..n).step_by(step).map(|k| (time[k], v[k])).collect() };
+    let start =
+        if n.saturating_sub(holdout_start) >= 2 { holdout_start } else { n.saturating_sub(FIGURE_WINDOW) };
+    let end = (start + FIGURE_WINDOW).min(n);
+    let pts = |v: &[f64]| -> Vec<(f64, f64)> { (start..end).map(|k| (time[k], v[k])).collect() };
     let series = [
-        XySeries { label: "recorded".into(), points: pts(y), error: None },
-        XySeries { label: "simulated".into(), points: pts(s), error: None },
-        XySeries { label: "corrected".into(), points: pts(c), error: None },
+        XySeries::line("recorded", pts(y), false),
+        XySeries::line("nominal simulation", pts(s), true),
+        XySeries::line("corrected", pts(c), false),
     ];
-    write_xy_chart(dir, name, title, "time [s]", "output", &series)?;
+    let title = format!("{title} (held-out samples {start}..{end})");
+    write_xy_chart(dir, name, &title, "time [s]", "output", &series)?;
     Ok(())
 }

@@ -60,7 +60,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "Figure 4: spread of I(u(t-1); e2(t)) against record length",
         "log2 N",
         "standard deviation (nats)",
-        &[XySeries { label: "std over runs".into(), points: length, error: None }],
+        &[XySeries::points("std over runs", length, None)],
     )?;
     let means: Vec<(f64, f64)> = rep.length_study.iter().map(|s| ((s.0 as f64).log2(), s.1)).collect();
     let errs: Vec<f64> = rep.length_study.iter().map(|s| s.2).collect();
@@ -70,7 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "Figure 4: mean ± sd of I(u(t-1); e2(t))",
         "log2 N",
         "MI (nats)",
-        &[XySeries { label: "mean ± sd".into(), points: means, error: Some(errs) }],
+        &[XySeries::points("mean ± sd", means, Some(errs))],
     )?;
     let exc: Vec<(f64, f64)> =
         rep.excitation_study.iter().enumerate().map(|(k, e)| (k as f64 + 1.0, e.1)).collect();
@@ -88,7 +88,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ),
         "excitation",
         "MI (nats)",
-        &[XySeries { label: "e2+e3+e4".into(), points: exc, error: None }],
+        &[XySeries::points("e2+e3+e4", exc, None)],
     )?;
 
     let json = json!({

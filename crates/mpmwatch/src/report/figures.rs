@@ -315,9 +315,26 @@ pub struct XySeries {
     pub points: Vec<(f64, f64)>,
     /// Half-widths of an error bar at each point, if any.
     pub error: Option<Vec<f64>>,
+    /// A marker at every point (a few points of a study); off for time series, where a marker
+    /// per sample hides the signal.
+    pub markers: bool,
+    /// Drawn dashed (e.g. the nominal simulation under the recorded and corrected outputs).
+    pub dashed: bool,
 }
 
-/// A simple x–y chart (lines with markers, optional error bars), as SVG and PNG.
+impl XySeries {
+    /// A study's series: a line through markers.
+    pub fn points(label: impl Into<String>, points: Vec<(f64, f64)>, error: Option<Vec<f64>>) -> Self {
+        Self { label: label.into(), points, error, markers: true, dashed: false }
+    }
+
+    /// A time series: a plain line, dashed or not.
+    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>, dashed: bool) -> Self {
+        Self { label: label.into(), points, error: None, markers: false, dashed }
+    }
+}
+
+/// A simple x–y chart (lines, markers where asked, optional error bars), as SVG and PNG.
 pub fn write_xy_chart(
     dir: &Path,
     name: &str,
@@ -367,11 +384,22 @@ fn draw_xy<DB: DrawingBackend>(
         .draw()?;
     for (k, s) in series.iter().enumerate() {
         let colour = PALETTE[k % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))?
-            .label(s.label.clone())
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2)));
-        chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 4, colour.filled())))?;
+        let legend =
+            move |(x, y): (i32, i32)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2));
+        if s.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, colour.stroke_width(2)))?
+                .label(s.label.clone())
+                .legend(legend);
+        } else {
+            chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))?
+                .label(s.label.clone())
+                .legend(legend);
+        }
+        if s.markers {
+            chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 4, colour.filled())))?;
+        }
         if let Some(err) = &s.error {
             for (p, e) in s.points.iter().zip(err) {
                 chart.draw_series(LineSeries::new([(p.0, p.1 - e), (p.0, p.1 + e)], colour))?;
