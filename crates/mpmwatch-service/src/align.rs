@@ -257,10 +257,14 @@ impl Aligner {
         self.jumps.push(Jump { from, to });
     }
 
-    /// Continues after rows up to `slot` were restored from the store.
-    pub fn resume_after(&mut self, slot: i64) {
+    /// Continues after the rows of `slots` (ascending) were restored from the store: they are
+    /// closed and complete, so a repeat of one is `out_of_order`, while the slots between them
+    /// stay open to back-fill.
+    pub fn resume_after(&mut self, slots: &[i64]) {
+        let Some(&slot) = slots.last() else { return };
         self.closed_through = Some(slot);
         self.newest = Some(self.newest.map_or(slot, |n| n.max(slot)));
+        self.done.extend(slots.iter().copied().filter(|&s| s > slot - self.window));
     }
 
     /// The slot of time `t`, if representable.

@@ -307,13 +307,11 @@ impl Controller {
     /// Restores window rows (oldest first) and the channels whose alarm was active.
     pub fn restore(&mut self, rows: Vec<WindowRow>, active: &[(String, String)], history: Vec<AlarmEvent>) {
         self.residuals.replay(&rows);
-        let last = rows.last().map(|r| r.slot);
+        let slots: Vec<i64> = rows.iter().map(|r| r.slot).collect();
         for r in rows {
             self.window.push(r);
         }
-        if let Some(s) = last {
-            self.aligner.resume_after(s);
-        }
+        self.aligner.resume_after(&slots);
         for (dither, cv) in active {
             if let (Some(i), Some(j)) =
                 (self.cfg.dither.iter().position(|d| d == dither), self.cfg.cv.iter().position(|c| c == cv))
@@ -541,6 +539,8 @@ a = [1.0, -0.7]
         b.restore(a.window.rows().cloned().collect(), &[("ud1".into(), "y1".into())], Vec::new());
         assert_eq!(b.window.len(), 40);
         assert!(b.alarm_active(0, 0));
+        let again = b.ingest(Role::Cv, "y1", payload::encode(10.0, 0.0).as_bytes());
+        assert_eq!(again.dropped, vec![(DropReason::OutOfOrder, 1)], "a restored row is closed and complete");
         for k in 40..45 {
             feed(&mut a, k);
             feed(&mut b, k);
