@@ -224,9 +224,10 @@ pub fn write_outputs(
     Ok(())
 }
 
-/// Samples drawn in an output figure: a window a reader can follow sample by sample (at 610 Hz
-/// that is 0.8 s; a whole long record drawn at once, or every k-th sample of it, is a blur).
-const FIGURE_WINDOW: usize = 500;
+/// Samples drawn in an output figure: a window a reader can follow cycle by cycle (at 610 Hz
+/// that is 0.33 s of Silverbox, about 15 periods; a whole long record drawn at once, or every
+/// k-th sample of it, is a blur).
+const FIGURE_WINDOW: usize = 200;
 
 /// A figure of recorded, simulated (nominal) and corrected output over a window of at most
 /// [`FIGURE_WINDOW`] consecutive samples from the start of the held-out tail, which no fit saw:
@@ -248,9 +249,9 @@ pub fn output_figure(
     let end = (start + FIGURE_WINDOW).min(n);
     let pts = |v: &[f64]| -> Vec<(f64, f64)> { (start..end).map(|k| (time[k], v[k])).collect() };
     let series = [
-        XySeries::line("recorded", pts(y), false),
-        XySeries::line("nominal simulation", pts(s), true),
-        XySeries::line("corrected", pts(c), false),
+        XySeries::line("recorded", pts(y), false, (120, 120, 120), 4),
+        XySeries::line("nominal simulation", pts(s), true, (214, 39, 40), 2),
+        XySeries::line("corrected", pts(c), false, (31, 119, 180), 2),
     ];
     let title = format!("{title} (held-out samples {start}..{end})");
     write_xy_chart(dir, name, &title, "time [s]", "output", &series)?;

@@ -320,17 +320,27 @@ pub struct XySeries {
     pub markers: bool,
     /// Drawn dashed (e.g. the nominal simulation under the recorded and corrected outputs).
     pub dashed: bool,
+    /// Line colour (RGB); `None` takes the palette's next.
+    pub colour: Option<(u8, u8, u8)>,
+    /// Line width in pixels.
+    pub width: u32,
 }
 
 impl XySeries {
     /// A study's series: a line through markers.
     pub fn points(label: impl Into<String>, points: Vec<(f64, f64)>, error: Option<Vec<f64>>) -> Self {
-        Self { label: label.into(), points, error, markers: true, dashed: false }
+        Self { label: label.into(), points, error, markers: true, dashed: false, colour: None, width: 2 }
     }
 
-    /// A time series: a plain line, dashed or not.
-    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>, dashed: bool) -> Self {
-        Self { label: label.into(), points, error: None, markers: false, dashed }
+    /// A time series: a plain line, dashed or not, of a given colour and width.
+    pub fn line(
+        label: impl Into<String>,
+        points: Vec<(f64, f64)>,
+        dashed: bool,
+        colour: (u8, u8, u8),
+        width: u32,
+    ) -> Self {
+        Self { label: label.into(), points, error: None, markers: false, dashed, colour: Some(colour), width }
     }
 }
 
@@ -383,17 +393,23 @@ fn draw_xy<DB: DrawingBackend>(
         .axis_desc_style((FONT, 12))
         .draw()?;
     for (k, s) in series.iter().enumerate() {
-        let colour = PALETTE[k % PALETTE.len()];
+        let colour = s.colour.map_or(PALETTE[k % PALETTE.len()], |(r, g, b)| RGBColor(r, g, b));
+        let width = s.width;
         let legend =
-            move |(x, y): (i32, i32)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2));
+            move |(x, y): (i32, i32)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(width));
         if s.dashed {
             chart
-                .draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, colour.stroke_width(2)))?
+                .draw_series(DashedLineSeries::new(
+                    s.points.iter().copied(),
+                    6,
+                    4,
+                    colour.stroke_width(width),
+                ))?
                 .label(s.label.clone())
                 .legend(legend);
         } else {
             chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2)))?
+                .draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(width)))?
                 .label(s.label.clone())
                 .legend(legend);
         }
