@@ -444,27 +444,19 @@ tolerance = 2
         assert_eq!(c.dropped[&DropReason::BadPayload], 1);
     }
 
+    /// A SISO controller whose residuals come from the model `0.5 q⁻¹ / (1 − 0.7 q⁻¹)`.
+    fn model_controller(window: usize, extra: &str) -> ControllerConfig {
+        let text = format!(
+            "[[controller]]\nid = \"m1\"\nperiod = 1.0\nmv = [\"u1\"]\ndither = [\"ud1\"]\ncv = [\"y1\"]\n\
+             residual = \"model\"\nwindow = {window}\nmin_samples = 32\nlag_max = 3\n{extra}\n\
+             [[controller.model]]\nmv = \"u1\"\ncv = \"y1\"\nb = [0.0, 0.5]\na = [1.0, -0.7]\n"
+        );
+        Config::parse(&text, "t").unwrap().controllers[0].clone()
+    }
+
     #[test]
     fn per_tag_batches_and_a_back_fill_give_the_rows_of_an_in_order_feed() {
-        let text = r#"
-[[controller]]
-id = "m1"
-period = 1.0
-mv = ["u1"]
-dither = ["ud1"]
-cv = ["y1"]
-residual = "model"
-window = 128
-min_samples = 32
-lag_max = 3
-grace = 30.0
-[[controller.model]]
-mv = "u1"
-cv = "y1"
-b = [0.0, 0.5]
-a = [1.0, -0.7]
-"#;
-        let cfg = Config::parse(text, "t").unwrap().controllers[0].clone();
+        let cfg = model_controller(128, "grace = 30.0");
         let u = |k: usize| ((k * 7) % 5) as f64;
         let d = |k: usize| if (k * 13) % 7 < 3 { 1.0 } else { -1.0 };
         let y = |k: usize| (k as f64 * 0.3).sin();
@@ -506,24 +498,7 @@ a = [1.0, -0.7]
 
     #[test]
     fn a_restored_model_controller_continues_with_the_same_residuals() {
-        let text = r#"
-[[controller]]
-id = "m1"
-period = 1.0
-mv = ["u1"]
-dither = ["ud1"]
-cv = ["y1"]
-residual = "model"
-window = 64
-min_samples = 32
-lag_max = 3
-[[controller.model]]
-mv = "u1"
-cv = "y1"
-b = [0.0, 0.5]
-a = [1.0, -0.7]
-"#;
-        let cfg = Config::parse(text, "t").unwrap().controllers[0].clone();
+        let cfg = model_controller(64, "");
         let mut a = Controller::new(cfg.clone()).unwrap();
         let feed = |c: &mut Controller, k: usize| {
             let t = k as f64;
