@@ -395,8 +395,12 @@ impl Aligner {
         }
         if let Some(c) = self.closed_through {
             let keep_from = c.saturating_sub(self.window) + 1;
-            self.done = self.done.split_off(&keep_from);
-            self.holes = self.holes.split_off(&keep_from);
+            while self.done.first().is_some_and(|&s| s < keep_from) {
+                self.done.pop_first();
+            }
+            while self.holes.first_key_value().is_some_and(|(&s, _)| s < keep_from) {
+                self.holes.pop_first();
+            }
         }
     }
 }
