@@ -9,10 +9,11 @@ use crate::info::correlation::{ccf, ccf_limit, family_wise_z, pearson};
 use crate::info::significance::test_prepared;
 use crate::info::{
     FamilyOptions, FamilyTest, InfoError, LaggedPair, Lags, MiOptions, Statistic, SurrogateOptions,
-    Threshold, auto_tmax, family_test,
+    Threshold, auto_tmax, family_test_group,
 };
 
 use super::partial::PartialPlan;
+use super::pool::exchangeable_groups;
 use super::verdict::{Channel, localise};
 use super::whiten::{ArWhitener, drop_segment_heads};
 
@@ -404,12 +405,12 @@ pub fn analyze_segments(
         .into_par_iter()
         .map(|j| plan_of(cut_of(j)).and_then(|p| p.fit(residuals[j].values)))
         .collect();
-    let cells = pairs
+    // Partial out the other dithers, then whiten what is left with an AR model fitted to it
+    // (the per-residual whitener is reported; the per-element refit differs only by the removed
+    // dither-driven part).
+    let prepared: Vec<Prepared> = pairs
         .par_iter()
         .map(|&(j, i)| {
-            // Partial out the other dithers, then whiten what is left with an AR model fitted
-            // to it (the per-residual whitener is reported; the per-element refit differs only
-            // by the removed dither-driven part).
             let (cleaned, d_clean, segs1) = match plan_of(cut_of(j)) {
                 Some(plan) => (
                     plan.partial_out(residuals[j].values, fits[j].as_deref(), i),
@@ -422,13 +423,34 @@ pub fn analyze_segments(
                 Some(max) => ArWhitener::fit_segments(&cleaned, &segs1, max),
                 None => ArWhitener { coefficients: Vec::new(), variance_ratio: 1.0 },
             };
-            let (white, segs) = w.apply_segments(&cleaned, &segs1);
-            let (d_white, _) = drop_segment_heads(&d_clean, &segs1, w.order());
-            let d = Signal { name: dithers[i].name, values: &d_white };
-            let r = Signal { name: residuals[j].name, values: &white };
-            cell(&d, &r, i, j, lags[j], &segs, opts)
+            let (residual, segments) = w.apply_segments(&cleaned, &segs1);
+            let (dither, _) = drop_segment_heads(&d_clean, &segs1, w.order());
+            Prepared { mv: i, cv: j, dither, residual, segments }
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect();
+    // Under the family rule the elements of one residual whose dithers are alike share their
+    // surrogates (see `pool`); the paper's rule keeps one set per element, as published.
+    let excited_idx: Vec<usize> = (0..dithers.len()).filter(|&i| excited[i]).collect();
+    let dither_groups = match opts.method {
+        Method::Family => exchangeable_groups(&dither_values, &excited_idx, &opts.mi),
+        Method::Paper => excited_idx.iter().map(|&i| vec![i]).collect(),
+    };
+    let groups: Vec<Vec<&Prepared>> = (0..residuals.len())
+        .flat_map(|j| {
+            let prepared = &prepared;
+            dither_groups.iter().map(move |g| {
+                g.iter().filter_map(|&i| prepared.iter().find(|p| p.cv == j && p.mv == i)).collect()
+            })
+        })
+        .collect();
+    let mut cells: Vec<Cell> = groups
+        .par_iter()
+        .map(|g| group_cells(g, dithers, residuals, lags[g[0].cv], opts))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+    cells.sort_by_key(|c| (c.cv, c.mv));
     let channels = localise(&cells, &excited, dithers, residuals);
     Ok(MatrixResult {
         dithers: dithers.iter().map(|d| d.name.to_string()).collect(),
@@ -447,23 +469,72 @@ pub fn analyze_segments(
     })
 }
 
+/// One element's series after partialling-out and whitening.
+struct Prepared {
+    mv: usize,
+    cv: usize,
+    dither: Vec<f64>,
+    residual: Vec<f64>,
+    segments: Vec<usize>,
+}
+
+/// The cells of one group of elements of a residual: under the family rule tested together on
+/// shared surrogates, under the paper's rule one by one.
+fn group_cells(
+    group: &[&Prepared],
+    dithers: &[Signal<'_>],
+    residuals: &[Signal<'_>],
+    lags: Lags,
+    opts: &MatrixOptions,
+) -> Result<Vec<Cell>, InfoError> {
+    let seed_of = |e: &Prepared| opts.surrogates.seed + 1000 * e.cv as u64 + e.mv as u64;
+    let built = group
+        .iter()
+        .map(|e| {
+            let pair = LaggedPair::segmented(&e.dither, &e.residual, lags, 1, &opts.mi, &e.segments)?;
+            let pair2 = if opts.joint_embedding {
+                Some(LaggedPair::segmented(&e.dither, &e.residual, lags, 2, &opts.mi, &e.segments)?)
+            } else {
+                None
+            };
+            Ok((pair, pair2))
+        })
+        .collect::<Result<Vec<_>, InfoError>>()?;
+    let mut family: Vec<Option<FamilyTest>> = match opts.method {
+        Method::Paper => vec![None; group.len()],
+        Method::Family => {
+            let sur = SurrogateOptions { seed: seed_of(group[0]), ..opts.surrogates };
+            let fo = FamilyOptions { alpha: opts.alpha, surrogates: sur, ..FamilyOptions::default() };
+            let elements: Vec<_> = built.iter().map(|(p, j)| (p, j.as_ref())).collect();
+            family_test_group(&elements, &fo)?.into_iter().map(Some).collect()
+        }
+    };
+    group
+        .iter()
+        .zip(&built)
+        .zip(family.iter_mut())
+        .map(|((e, (pair, pair2)), family)| {
+            let d = Signal { name: dithers[e.mv].name, values: &e.dither };
+            let r = Signal { name: residuals[e.cv].name, values: &e.residual };
+            let sur = SurrogateOptions { seed: seed_of(e), ..opts.surrogates };
+            cell(&d, &r, e.mv, e.cv, (pair, pair2.as_ref()), family.take(), &e.segments, &sur, opts)
+        })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
 fn cell(
     d: &Signal<'_>,
     r: &Signal<'_>,
     mv: usize,
     cv: usize,
-    lags: Lags,
+    (pair, pair2): (&LaggedPair<'_>, Option<&LaggedPair<'_>>),
+    family: Option<FamilyTest>,
     segments: &[usize],
+    sur: &SurrogateOptions,
     opts: &MatrixOptions,
 ) -> Result<Cell, InfoError> {
-    let sur =
-        SurrogateOptions { seed: opts.surrogates.seed + 1000 * cv as u64 + mv as u64, ..opts.surrogates };
-    let pair = LaggedPair::segmented(d.values, r.values, lags, 1, &opts.mi, segments)?;
-    let pair2 = if opts.joint_embedding {
-        Some(LaggedPair::segmented(d.values, r.values, lags, 2, &opts.mi, segments)?)
-    } else {
-        None
-    };
+    let lags = pair.lags();
     // With gaps, the CCF over the pair set (which never straddles one); without, the whole
     // record's 1/N form, as before.
     let (ccf_values, n_ccf) = if segments.len() > 1 {
@@ -484,22 +555,20 @@ fn cell(
         pearson_r: p.r,
         pearson_limit: p.limit,
     };
-    let (pairwise, joint, family, decision) = match opts.method {
-        Method::Paper => {
-            let pairwise = ElementTest::from(test_prepared(&pair, &sur)?);
-            let joint = match &pair2 {
+    let (pairwise, joint, family, decision) = match family {
+        None => {
+            let pairwise = ElementTest::from(test_prepared(pair, sur)?);
+            let joint = match pair2 {
                 Some(p2) => Some(ElementTest::from(test_prepared(
                     p2,
-                    &SurrogateOptions { seed: sur.seed ^ 0x5eed, ..sur },
+                    &SurrogateOptions { seed: sur.seed ^ 0x5eed, ..*sur },
                 )?)),
                 None => None,
             };
             let decision = paper_decision(&pairwise, joint.as_ref());
             (pairwise, joint, None, decision)
         }
-        Method::Family => {
-            let fo = FamilyOptions { alpha: opts.alpha, surrogates: sur, ..FamilyOptions::default() };
-            let t = family_test(&pair, pair2.as_ref(), &fo)?;
+        Some(t) => {
             let pairwise = ElementTest::from_family(&t, Statistic::Mi, opts.surrogates.z);
             let joint =
                 pair2.is_some().then(|| ElementTest::from_family(&t, Statistic::JointMi, opts.surrogates.z));

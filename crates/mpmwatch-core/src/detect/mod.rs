@@ -5,6 +5,7 @@
 
 mod matrix;
 mod partial;
+mod pool;
 mod verdict;
 mod whiten;
 

@@ -12,7 +12,7 @@
 //! and m_i counts samples at distance 0.
 
 use super::digamma::digamma;
-use super::marginal::{count_strictly_within_at, count_within, kth_neighbour_distance};
+use super::marginal::{count_strictly_within_range, count_within, kth_neighbour_distance};
 
 /// The distinct levels of a discrete series and each sample's level index.
 #[derive(Debug, Clone, PartialEq)]
@@ -96,10 +96,13 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
         let vals = &values[range.clone()];
         let k_c = k.min(n_c - 1);
         let psi_nc = digamma(n_c);
+        let at = &position[range.clone()];
         for (p, &centre) in vals.iter().enumerate() {
             let r = kth_neighbour_distance(vals, p, k_c);
             let (k_i, m_i) = if r > 0.0 {
-                (k_c, count_strictly_within_at(y_sorted, position[range.start + p] as usize, r))
+                let lower = if p > k_c { at[p - k_c - 1] as usize + 1 } else { 0 };
+                let upper = at.get(p + k_c + 1).map_or(y_sorted.len(), |&a| a as usize);
+                (k_c, count_strictly_within_range(y_sorted, lower, upper, at[p] as usize, r))
             } else {
                 (count_within(vals, centre, 0.0) - 1, count_within(y_sorted, centre, 0.0))
             };

@@ -173,8 +173,11 @@ pub struct FamilyTest {
     /// The rate tested at.
     pub alpha: f64,
     /// Null surrogates drawn after calibration (fewer than the maximum when the test stopped
-    /// early).
+    /// early), for the whole group when surrogates were pooled.
     pub surrogates: usize,
+    /// Elements that shared this one's surrogates, itself included (1: its own surrogates;
+    /// see [`family_test_group`]).
+    pub pooled: usize,
     /// Surrogate method used.
     pub method: SurrogateMethod,
     /// Surrogate seed.
@@ -248,28 +251,61 @@ fn statistics(
     v
 }
 
-/// Tests one element: `pair` is the dither–residual pair with embedding width 1, `joint` the
-/// same pair with width 2 when the joint-lag MI is in the family. Both must share the lag range.
+/// One element of a family test: the dither–residual pair with embedding width 1, and the same
+/// pair with width 2 when the joint-lag MI is in the family (both with the same lag range).
+pub type Element<'p, 'a> = (&'p LaggedPair<'a>, Option<&'p LaggedPair<'a>>);
+
+/// Tests one element ([`family_test_group`] with a group of one).
 pub fn family_test(
     pair: &LaggedPair<'_>,
     joint: Option<&LaggedPair<'_>>,
     opts: &FamilyOptions,
 ) -> Result<FamilyTest, InfoError> {
+    let mut tests = family_test_group(&[(pair, joint)], opts)?;
+    Ok(tests.pop().expect("one test per element"))
+}
+
+/// Tests the elements of one residual whose dithers are exchangeable under the null (the same
+/// levels in the same proportions, [`crate::detect`] decides which), with one shared set of
+/// surrogates.
+///
+/// Why sharing is valid and what it buys: with no mismatch, element g's statistics on a
+/// circular shift of its own dither are a draw from the null of every element of the group,
+/// since the residuals differ only by which dither was partialled out and the dithers are
+/// alike in distribution. Surrogate m is drawn on element `m mod G`, the calibration and the
+/// null maxima are pooled, and each element's p-value is read from the pooled maxima. A group
+/// of G elements then costs `calibration·min(G, 2) + count` surrogates instead of up to
+/// `G·(calibration + count)`, and the doubled calibration standardises better than one
+/// element's 30. A group of one is the single-element test, surrogate for surrogate.
+///
+/// The sequential stop runs on the group: draws continue until every element is decided
+/// (h exceedances, or none and a tail p-value far below alpha) or `count` are drawn.
+pub fn family_test_group(
+    elements: &[Element<'_, '_>],
+    opts: &FamilyOptions,
+) -> Result<Vec<FamilyTest>, InfoError> {
     opts.check()?;
-    if let Some(j) = joint
-        && j.lags() != pair.lags()
-    {
-        return Err(InfoError::InvalidParameter {
-            name: "joint",
-            value: format!("{:?}", j.lags()),
-            reason: "the joint pair must have the pairwise pair's lags",
-        });
+    let Some(&(first, first_joint)) = elements.first() else {
+        return Ok(Vec::new());
+    };
+    for &(pair, joint) in elements {
+        let mismatched = joint.is_some_and(|j| j.lags() != pair.lags())
+            || pair.lags() != first.lags()
+            || joint.is_some() != first_joint.is_some()
+            || pair.is_discrete() != first.is_discrete();
+        if mismatched {
+            return Err(InfoError::InvalidParameter {
+                name: "joint",
+                value: format!("{:?}", pair.lags()),
+                reason: "the elements of a group must share the lag range, the joint statistic and the dither kind",
+            });
+        }
     }
     let sur = &opts.surrogates;
     let method = match sur.method {
-        SurrogateMethod::Auto if pair.is_discrete() => SurrogateMethod::CircularShift,
+        SurrogateMethod::Auto if first.is_discrete() => SurrogateMethod::CircularShift,
         SurrogateMethod::Auto => SurrogateMethod::Iaaft,
-        SurrogateMethod::Iaaft if pair.is_discrete() => {
+        SurrogateMethod::Iaaft if first.is_discrete() => {
             return Err(InfoError::InvalidParameter {
                 name: "surrogate method",
                 value: "iaaft".into(),
@@ -278,22 +314,42 @@ pub fn family_test(
         }
         m => m,
     };
-    let x = pair.x();
-    let width = if joint.is_some() { 2 } else { 1 };
-    let bounds = shift_bounds(pair.len(), pair.lags().max, width)?;
-    let iaaft = if method == SurrogateMethod::Iaaft { Some(Iaaft::new(x, sur.iaaft)?) } else { None };
+    let width = if first_joint.is_some() { 2 } else { 1 };
+    struct Generator<'e, 'p, 'a> {
+        element: &'e Element<'p, 'a>,
+        bounds: (usize, usize),
+        iaaft: Option<Iaaft>,
+    }
+    let generators: Vec<Generator<'_, '_, '_>> = elements
+        .iter()
+        .map(|e| {
+            Ok(Generator {
+                element: e,
+                bounds: shift_bounds(e.0.len(), e.0.lags().max, width)?,
+                iaaft: if method == SurrogateMethod::Iaaft {
+                    Some(Iaaft::new(e.0.x(), sur.iaaft)?)
+                } else {
+                    None
+                },
+            })
+        })
+        .collect::<Result<_, InfoError>>()?;
+    let g_count = generators.len();
     let draw = |m: usize| -> Vec<f64> {
+        let g = &generators[m % g_count];
+        let (pair, joint) = *g.element;
         let mut rng = stream(sur.seed, m);
-        match &iaaft {
-            Some(g) => statistics(pair, joint, Some(&g.generate(&mut rng).0), 0),
-            None => statistics(pair, joint, None, draw_shift(x, bounds, &mut rng)),
+        match &g.iaaft {
+            Some(iaaft) => statistics(pair, joint, Some(&iaaft.generate(&mut rng).0), 0),
+            None => statistics(pair, joint, None, draw_shift(pair.x(), g.bounds, &mut rng)),
         }
     };
 
-    let observed = statistics(pair, joint, None, 0);
-    let calibration: Vec<Vec<f64>> = (0..opts.calibration).into_par_iter().map(draw).collect();
-    let dims = observed.len();
-    let n_lags = pair.lags().len();
+    let observed: Vec<Vec<f64>> = elements.iter().map(|&(p, j)| statistics(p, j, None, 0)).collect();
+    let calibration_count = opts.calibration * g_count.min(2);
+    let calibration: Vec<Vec<f64>> = (0..calibration_count).into_par_iter().map(draw).collect();
+    let dims = observed[0].len();
+    let n_lags = first.lags().len();
     let ccf_from = dims - n_lags;
     let mut mean = vec![0.0; dims];
     let mut std = vec![0.0; dims];
@@ -311,89 +367,108 @@ pub fn family_test(
         if d >= ccf_from { z.abs() } else { z - offset }
     };
     let maximum = |s: &[f64]| (0..dims).map(|d| standardised(s, d)).fold(f64::NEG_INFINITY, f64::max);
-    let (arg, max_z) = (0..dims)
-        .map(|d| (d, standardised(&observed, d)))
-        .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+    let argmax: Vec<(usize, f64)> = observed
+        .iter()
+        .map(|o| {
+            (0..dims)
+                .map(|d| (d, standardised(o, d)))
+                .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
+        })
+        .collect();
 
-    // Null maxima in batches: stop when clearly null (h exceedances) or clearly significant (no
-    // exceedance and a tail p-value far below alpha once the tail rests on enough maxima).
+    // Null maxima in batches: stop when every element is clearly null (h exceedances) or
+    // clearly significant (no exceedance and a tail p-value far below alpha once the tail rests
+    // on enough maxima).
     const BATCH: usize = 10;
     const TAIL_MIN: usize = 50;
     let mut null_max: Vec<f64> = Vec::with_capacity(sur.count);
-    let mut exceed = 0usize;
-    let mut stopped_null = false;
+    let mut exceed = vec![0usize; g_count];
     while null_max.len() < sur.count {
-        let from = opts.calibration + null_max.len();
-        let to = (from + BATCH).min(opts.calibration + sur.count);
+        let from = calibration_count + null_max.len();
+        let to = (from + BATCH).min(calibration_count + sur.count);
         let batch: Vec<f64> = (from..to).into_par_iter().map(|m| maximum(&draw(m))).collect();
-        exceed += batch.iter().filter(|&&m| m >= max_z).count();
-        null_max.extend(batch);
-        if exceed >= opts.exceedances {
-            stopped_null = true;
-            break;
+        for (e, &(_, max_z)) in exceed.iter_mut().zip(&argmax) {
+            *e += batch.iter().filter(|&&m| m >= max_z).count();
         }
-        if exceed == 0
-            && null_max.len() >= TAIL_MIN
-            && Gumbel::fit(&null_max).survival(max_z) < opts.alpha / 10.0
-        {
+        null_max.extend(batch);
+        let tail = (null_max.len() >= TAIL_MIN).then(|| Gumbel::fit(&null_max));
+        let decided = exceed.iter().zip(&argmax).all(|(&e, &(_, max_z))| {
+            e >= opts.exceedances || (e == 0 && tail.is_some_and(|g| g.survival(max_z) < opts.alpha / 10.0))
+        });
+        if decided {
             break;
         }
     }
     let gumbel = Gumbel::fit(&null_max);
     let l = null_max.len();
-    // Every element ends either clearly null (h exceedances) or with fewer than h, where the
-    // tail model is the finer estimate.
-    let (p_value, p_source) = if stopped_null {
-        (exceed as f64 / l as f64, PValueSource::Sequential)
-    } else {
-        (gumbel.survival(max_z), PValueSource::GumbelTail)
-    };
     let critical_z = gumbel.upper_quantile(opts.alpha);
-
-    let lags: Vec<usize> = pair.lags().iter().collect();
+    let lags: Vec<usize> = first.lags().iter().collect();
     let mut kinds = vec![Statistic::Mi];
-    if joint.is_some() {
+    if first_joint.is_some() {
         kinds.push(Statistic::JointMi);
     }
     kinds.push(Statistic::Ccf);
-    let profiles = kinds
-        .iter()
-        .enumerate()
-        .map(|(s, &statistic)| {
+    let norms: Vec<(f64, f64)> = (0..kinds.len())
+        .map(|s| {
             let r = s * n_lags..(s + 1) * n_lags;
             let norms: Vec<f64> = calibration.iter().map(|c| crate::numerics::mean(&c[r.clone()])).collect();
-            let norm_mean = crate::numerics::mean(&norms);
-            let norm_std = crate::numerics::std_dev(&norms, 1);
-            StatisticProfile {
-                statistic,
-                norm: crate::numerics::mean(&observed[r.clone()]),
-                norm_mean,
-                norm_std,
-                values: observed[r.clone()].to_vec(),
-                critical: r
-                    .clone()
-                    .map(|d| mean[d] + (critical_z + if d >= ccf_from { 0.0 } else { offset }) * std[d])
-                    .collect(),
-                mean: mean[r.clone()].to_vec(),
-                std: std[r].to_vec(),
+            (crate::numerics::mean(&norms), crate::numerics::std_dev(&norms, 1))
+        })
+        .collect();
+    let tests = observed
+        .iter()
+        .zip(&argmax)
+        .zip(&exceed)
+        .map(|((observed, &(arg, max_z)), &exceed)| {
+            // An element ends either clearly null (h exceedances) or with fewer than h, where
+            // the tail model is the finer estimate.
+            let (p_value, p_source) = if exceed >= opts.exceedances {
+                (exceed as f64 / l as f64, PValueSource::Sequential)
+            } else {
+                (gumbel.survival(max_z), PValueSource::GumbelTail)
+            };
+            let profiles = kinds
+                .iter()
+                .zip(&norms)
+                .enumerate()
+                .map(|(s, (&statistic, &(norm_mean, norm_std)))| {
+                    let r = s * n_lags..(s + 1) * n_lags;
+                    StatisticProfile {
+                        statistic,
+                        norm: crate::numerics::mean(&observed[r.clone()]),
+                        norm_mean,
+                        norm_std,
+                        values: observed[r.clone()].to_vec(),
+                        critical: r
+                            .clone()
+                            .map(|d| {
+                                mean[d] + (critical_z + if d >= ccf_from { 0.0 } else { offset }) * std[d]
+                            })
+                            .collect(),
+                        mean: mean[r.clone()].to_vec(),
+                        std: std[r].to_vec(),
+                    }
+                })
+                .collect();
+            FamilyTest {
+                mi_offset: offset,
+                argmax: (kinds[arg / n_lags], lags[arg % n_lags]),
+                lags: lags.clone(),
+                profiles,
+                max_z,
+                critical_z,
+                significant: p_value <= opts.alpha,
+                p_value,
+                p_source,
+                alpha: opts.alpha,
+                surrogates: l,
+                pooled: g_count,
+                method,
+                seed: sur.seed,
             }
         })
         .collect();
-    Ok(FamilyTest {
-        mi_offset: offset,
-        argmax: (kinds[arg / n_lags], lags[arg % n_lags]),
-        lags,
-        profiles,
-        max_z,
-        critical_z,
-        significant: p_value <= opts.alpha,
-        p_value,
-        p_source,
-        alpha: opts.alpha,
-        surrogates: l,
-        method,
-        seed: sur.seed,
-    })
+    Ok(tests)
 }
 
 #[cfg(test)]

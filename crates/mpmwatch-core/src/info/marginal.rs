@@ -74,32 +74,33 @@ pub fn count_within(sorted: &[f64], c: f64, r: f64) -> usize {
     hi.saturating_sub(lo)
 }
 
-/// Distance from position `p` of a sorted array to its `k`-th nearest other element, found by
-/// walking outwards from `p` (O(k)). Requires `sorted.len() > k`.
+/// Distance from position `p` of a sorted array to its `k`-th nearest other element. Requires
+/// `sorted.len() > k`.
+///
+/// The k nearest elements with `p` itself are k + 1 consecutive ones, so the distance is the
+/// smallest, over the windows of k + 1 consecutive elements that hold `p`, of the window's
+/// largest distance from `p`. This evaluates all k + 1 windows without a branch, where a walk
+/// outwards from `p` chooses left or right at each step on a branch no processor predicts.
+/// Whatever the ties, the elements k + 1 places away on either side lie at least this far.
 pub fn kth_neighbour_distance(sorted: &[f64], p: usize, k: usize) -> f64 {
     let c = sorted[p];
-    let (mut lo, mut hi) = (p, p + 1);
-    let mut d = 0.0;
-    for _ in 0..k {
-        let left = if lo > 0 { Some(c - sorted[lo - 1]) } else { None };
-        let right = sorted.get(hi).map(|&v| v - c);
-        d = match (left, right) {
-            (Some(l), Some(r)) if l <= r => {
-                lo -= 1;
-                l
-            }
-            (Some(l), None) => {
-                lo -= 1;
-                l
-            }
-            (_, Some(r)) => {
-                hi += 1;
-                r
-            }
-            (None, None) => unreachable!("fewer than k + 1 elements"),
-        };
+    let first = p.saturating_sub(k);
+    let last = p.min(sorted.len() - 1 - k);
+    (first..=last).map(|s| (c - sorted[s]).max(sorted[s + k] - c)).fold(f64::INFINITY, f64::min)
+}
+
+/// Number of elements of `s[lower..upper]` strictly within `r` of `c = s[p]`, for a range known
+/// to hold every element of the sorted slice `s` that is (for Ross's estimator: between the
+/// class neighbours k + 1 places away, see [`kth_neighbour_distance`]). A short range is counted in one branch-free pass, which beats a search
+/// whose branches the processor cannot predict; a long one is searched from `p`.
+pub fn count_strictly_within_range(s: &[f64], lower: usize, upper: usize, p: usize, r: f64) -> usize {
+    const LINEAR: usize = 64;
+    let c = s[p];
+    if upper - lower <= LINEAR {
+        s[lower..upper].iter().map(|&v| usize::from((v - c).abs() < r)).sum()
+    } else {
+        count_strictly_within_at(s, p, r)
     }
-    d
 }
 
 #[cfg(test)]
@@ -129,6 +130,30 @@ mod tests {
         for (i, &c) in v.iter().enumerate() {
             for r in [0.05, 0.5, 1.0, 3.0, 7.5, 40.0] {
                 assert_eq!(m.count_strictly_within_sample(i, r), brute_count(&v, c, r, true), "i={i} r={r}");
+            }
+        }
+    }
+
+    #[test]
+    fn counts_between_the_class_neighbours_k_plus_one_away_match_brute_force() {
+        // A class is every third element of a sorted array with ties across classes; counting
+        // between the class's elements k + 1 places either side of the centre gives the whole
+        // array's count.
+        let whole: Vec<f64> = {
+            let mut v: Vec<f64> = (0..400).map(|i| (((i * 7919) % 331) as f64 / 7.0).floor()).collect();
+            v.sort_by(f64::total_cmp);
+            v
+        };
+        let positions: Vec<usize> = (0..whole.len()).step_by(3).collect();
+        let class: Vec<f64> = positions.iter().map(|&p| whole[p]).collect();
+        for k in [1, 4, 9] {
+            for (q, &p) in positions.iter().enumerate() {
+                let r = kth_neighbour_distance(&class, q, k);
+                let lower = if q > k { positions[q - k - 1] + 1 } else { 0 };
+                let upper = positions.get(q + k + 1).copied().unwrap_or(whole.len());
+                let want = brute_count(&whole, whole[p], r, true);
+                assert_eq!(count_strictly_within_range(&whole, lower, upper, p, r), want, "p={p} k={k}");
+                assert_eq!(count_strictly_within_at(&whole, p, r), want, "p={p} k={k}");
             }
         }
     }

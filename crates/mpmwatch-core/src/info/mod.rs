@@ -26,7 +26,10 @@ pub use error::InfoError;
 pub use estimator::{
     Estimator, MiEstimate, MiOptions, Units, XKind, mutual_information, mutual_information_multi,
 };
-pub use family::{FamilyOptions, FamilyTest, PValueSource, Statistic, StatisticProfile, family_test};
+pub use family::{
+    Element, FamilyOptions, FamilyTest, PValueSource, Statistic, StatisticProfile, family_test,
+    family_test_group,
+};
 pub use lagged::{LaggedPair, LaggedProfile, Lags, auto_tmax, lagged_profile};
 pub use normalized::{estevez, joe};
 pub use significance::{LaggedTest, SurrogateMethod, SurrogateOptions, Threshold, lagged_test};
