@@ -8,8 +8,8 @@
 //! pair of consecutive levels (what the joint embedding sees) therefore give the same null.
 //! Continuous dithers (iAAFT surrogates, which keep each dither's own spectrum) are never pooled.
 //!
-//! The shares are compared with a tolerance of three standard errors of the difference of two
-//! shares estimated from n samples, `3·√(2·p(1−p)/n)` at the worst case p = ½: dithers of one
+//! The shares are compared with a tolerance of four standard errors of the difference of two
+//! shares estimated from n samples, `4·√(2·p(1−p)/n)` at the worst case p = ½: dithers of one
 //! design (a plant's PRBS generators are usually identical) fall together, and designs that differ
 //! in balance or in switching rate by more than sampling noise do not.
 
@@ -38,7 +38,7 @@ impl Signature {
     }
 
     fn alike(&self, other: &Self, n: usize) -> bool {
-        let tolerance = 3.0 * (0.5 / n as f64).sqrt();
+        let tolerance = 4.0 * (0.5 / n as f64).sqrt();
         self.levels == other.levels
             && self.shares.iter().zip(&other.shares).all(|(a, b)| (a - b).abs() <= tolerance)
     }

@@ -274,9 +274,9 @@ pub fn family_test(
 /// since the residuals differ only by which dither was partialled out and the dithers are
 /// alike in distribution. Surrogate m is drawn on element `m mod G`, the calibration and the
 /// null maxima are pooled, and each element's p-value is read from the pooled maxima. A group
-/// of G elements then costs `calibration·min(G, 2) + count` surrogates instead of up to
-/// `G·(calibration + count)`, and the doubled calibration standardises better than one
-/// element's 30. A group of one is the single-element test, surrogate for surrogate.
+/// of G elements then costs `calibration + count` surrogates instead of up to
+/// `G·(calibration + count)`. A group of one is the single-element test, surrogate for
+/// surrogate.
 ///
 /// The sequential stop runs on the group: draws continue until every element is decided
 /// (h exceedances, or none and a tail p-value far below alpha) or `count` are drawn.
@@ -346,7 +346,7 @@ pub fn family_test_group(
     };
 
     let observed: Vec<Vec<f64>> = elements.iter().map(|&(p, j)| statistics(p, j, None, 0)).collect();
-    let calibration_count = opts.calibration * g_count.min(2);
+    let calibration_count = opts.calibration;
     let calibration: Vec<Vec<f64>> = (0..calibration_count).into_par_iter().map(draw).collect();
     let dims = observed[0].len();
     let n_lags = first.lags().len();

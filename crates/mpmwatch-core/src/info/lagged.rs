@@ -342,13 +342,16 @@ impl<'a> LaggedPair<'a> {
         let t0 = self.width - 1;
         let np = self.used.as_ref().map_or(self.n_pairs, Vec::len);
         let base = levels.count();
-        let label_at = |t: usize| -> u16 {
-            let mut l = 0usize;
-            for d in 0..self.width {
-                l = l * base + levels.labels[(t - d + shift) % n] as usize;
-            }
-            l as u16
-        };
+        // The embedded label of every time from the first usable one, once for all lags.
+        let label: Vec<u16> = (0..n)
+            .map(|t| {
+                let mut l = 0usize;
+                for d in 0..self.width.min(t + 1) {
+                    l = l * base + levels.labels[(t - d + shift) % n] as usize;
+                }
+                l as u16
+            })
+            .collect();
         let mut ys = Vec::with_capacity(np);
         let mut labels = Vec::with_capacity(np);
         self.lags
@@ -361,7 +364,7 @@ impl<'a> LaggedPair<'a> {
                     let j = j as usize;
                     if j >= lo && j < hi && self.uses(j - lo) {
                         ys.push(self.y[j]);
-                        labels.push(label_at(j - tau));
+                        labels.push(label[j - tau]);
                     }
                 }
                 ross_sorted(&ys, &labels, classes, self.k)

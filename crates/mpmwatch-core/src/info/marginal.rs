@@ -82,17 +82,27 @@ pub fn count_within(sorted: &[f64], c: f64, r: f64) -> usize {
 /// largest distance from `p`. This evaluates all k + 1 windows without a branch, where a walk
 /// outwards from `p` chooses left or right at each step on a branch no processor predicts.
 /// Whatever the ties, the elements k + 1 places away on either side lie at least this far.
+#[inline]
 pub fn kth_neighbour_distance(sorted: &[f64], p: usize, k: usize) -> f64 {
     let c = sorted[p];
     let first = p.saturating_sub(k);
     let last = p.min(sorted.len() - 1 - k);
-    (first..=last).map(|s| (c - sorted[s]).max(sorted[s + k] - c)).fold(f64::INFINITY, f64::min)
+    let span = &sorted[first..=last + k];
+    let mut d = f64::INFINITY;
+    for (&a, &b) in span.iter().zip(&span[k..]) {
+        // Plain comparisons: the values are finite, so no NaN rule is needed.
+        let far = if c - a > b - c { c - a } else { b - c };
+        d = if far < d { far } else { d };
+    }
+    d
 }
 
 /// Number of elements of `s[lower..upper]` strictly within `r` of `c = s[p]`, for a range known
 /// to hold every element of the sorted slice `s` that is (for Ross's estimator: between the
-/// class neighbours k + 1 places away, see [`kth_neighbour_distance`]). A short range is counted in one branch-free pass, which beats a search
-/// whose branches the processor cannot predict; a long one is searched from `p`.
+/// class neighbours k + 1 places away, see [`kth_neighbour_distance`]). A short range is
+/// counted in one branch-free pass, which beats a search whose branches the processor cannot
+/// predict; a long one is searched from `p`.
+#[inline]
 pub fn count_strictly_within_range(s: &[f64], lower: usize, upper: usize, p: usize, r: f64) -> usize {
     const LINEAR: usize = 64;
     let c = s[p];
