@@ -335,43 +335,59 @@ pub fn family_test_group(
         })
         .collect::<Result<_, InfoError>>()?;
     let g_count = generators.len();
-    let draw = |m: usize| -> Vec<f64> {
+    let draw = |m: usize| -> (usize, Vec<f64>) {
         let g = &generators[m % g_count];
         let (pair, joint) = *g.element;
         let mut rng = stream(sur.seed, m);
-        match &g.iaaft {
+        let s = match &g.iaaft {
             Some(iaaft) => statistics(pair, joint, Some(&iaaft.generate(&mut rng).0), 0),
             None => statistics(pair, joint, None, draw_shift(pair.x(), g.bounds, &mut rng)),
-        }
+        };
+        (m % g_count, s)
     };
+    // The cross-correlation's moments over all admissible shifts, exact, where the surrogates
+    // are circular shifts; each element's own, since they are exact for it.
+    let exact: Vec<Option<Vec<(f64, f64)>>> = generators
+        .iter()
+        .map(|g| if g.iaaft.is_none() { g.element.0.linear_shift_moments(g.bounds) } else { None })
+        .collect();
 
     let observed: Vec<Vec<f64>> = elements.iter().map(|&(p, j)| statistics(p, j, None, 0)).collect();
     let calibration_count = opts.calibration;
-    let calibration: Vec<Vec<f64>> = (0..calibration_count).into_par_iter().map(draw).collect();
+    let calibration: Vec<Vec<f64>> = (0..calibration_count).into_par_iter().map(|m| draw(m).1).collect();
     let dims = observed[0].len();
     let n_lags = first.lags().len();
     let ccf_from = dims - n_lags;
-    let mut mean = vec![0.0; dims];
-    let mut std = vec![0.0; dims];
-    for d in 0..dims {
+    let mut sampled = vec![(0.0, 0.0); dims];
+    for (d, moment) in sampled.iter_mut().enumerate() {
         let col: Vec<f64> = calibration.iter().map(|s| s[d]).collect();
-        mean[d] = crate::numerics::mean(&col);
-        std[d] = crate::numerics::std_dev(&col, 1);
+        *moment = (crate::numerics::mean(&col), crate::numerics::std_dev(&col, 1));
     }
+    // The (mean, spread) that standardise dimension d of element g's statistics.
+    let moment = |g: usize, d: usize| -> (f64, f64) {
+        match &exact[g] {
+            Some(m) if d >= ccf_from => m[d - ccf_from],
+            _ => sampled[d],
+        }
+    };
     let offset = mi_offset(opts.alpha, opts.linear_share, n_lags, ccf_from);
-    let standardised = |s: &[f64], d: usize| -> f64 {
-        if std[d] <= 0.0 {
+    let standardised = |g: usize, s: &[f64], d: usize| -> f64 {
+        let (mean, std) = moment(g, d);
+        if std <= 0.0 {
             return f64::NEG_INFINITY;
         }
-        let z = (s[d] - mean[d]) / std[d];
+        let z = (s[d] - mean) / std;
         if d >= ccf_from { z.abs() } else { z - offset }
     };
-    let maximum = |s: &[f64]| (0..dims).map(|d| standardised(s, d)).fold(f64::NEG_INFINITY, f64::max);
+    let maximum = |(g, s): (usize, Vec<f64>)| {
+        (0..dims).map(|d| standardised(g, &s, d)).fold(f64::NEG_INFINITY, f64::max)
+    };
     let argmax: Vec<(usize, f64)> = observed
         .iter()
-        .map(|o| {
+        .enumerate()
+        .map(|(g, o)| {
             (0..dims)
-                .map(|d| (d, standardised(o, d)))
+                .map(|d| (d, standardised(g, o, d)))
                 .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
         })
         .collect();
@@ -386,7 +402,7 @@ pub fn family_test_group(
     while null_max.len() < sur.count {
         let from = calibration_count + null_max.len();
         let to = (from + BATCH).min(calibration_count + sur.count);
-        let batch: Vec<f64> = (from..to).into_par_iter().map(|m| maximum(&draw(m))).collect();
+        let batch: Vec<f64> = (from..to).into_par_iter().map(|m| maximum(draw(m))).collect();
         for (e, &(_, max_z)) in exceed.iter_mut().zip(&argmax) {
             *e += batch.iter().filter(|&&m| m >= max_z).count();
         }
@@ -419,7 +435,8 @@ pub fn family_test_group(
         .iter()
         .zip(&argmax)
         .zip(&exceed)
-        .map(|((observed, &(arg, max_z)), &exceed)| {
+        .enumerate()
+        .map(|(g, ((observed, &(arg, max_z)), &exceed))| {
             // An element ends either clearly null (h exceedances) or with fewer than h, where
             // the tail model is the finer estimate.
             let (p_value, p_source) = if exceed >= opts.exceedances {
@@ -442,11 +459,12 @@ pub fn family_test_group(
                         critical: r
                             .clone()
                             .map(|d| {
-                                mean[d] + (critical_z + if d >= ccf_from { 0.0 } else { offset }) * std[d]
+                                let (mean, std) = moment(g, d);
+                                mean + (critical_z + if d >= ccf_from { 0.0 } else { offset }) * std
                             })
                             .collect(),
-                        mean: mean[r.clone()].to_vec(),
-                        std: std[r].to_vec(),
+                        mean: r.clone().map(|d| moment(g, d).0).collect(),
+                        std: r.map(|d| moment(g, d).1).collect(),
                     }
                 })
                 .collect();

@@ -289,6 +289,25 @@ impl<'a> LaggedPair<'a> {
         self.correlations(|t| x_new[t])
     }
 
+    /// Per lag, the exact mean and standard deviation of [`Self::linear_profile_shifted`] over
+    /// every shift in `bounds` that [`super::draw_shift`] may return, on the discrete path
+    /// (`None` on the continuous one, or when no shift is admissible). See
+    /// [`super::shift_moments`].
+    pub fn linear_shift_moments(&self, bounds: (usize, usize)) -> Option<Vec<(f64, f64)>> {
+        let Path::Discrete { levels, .. } = &self.path else {
+            return None;
+        };
+        super::shift_moments::ccf_shift_moments(
+            self.x,
+            &self.y,
+            &levels.labels,
+            &self.times(),
+            self.lags.iter(),
+            self.moments,
+            bounds,
+        )
+    }
+
     /// The times used, `t0 + s` for the used s (all of `t0..t0 + span` without segments).
     fn times(&self) -> Vec<usize> {
         let t0 = self.width - 1;

@@ -15,6 +15,7 @@ mod ksg;
 pub(crate) mod lagged;
 pub(crate) mod marginal;
 pub(crate) mod normalized;
+pub(crate) mod shift_moments;
 pub(crate) mod significance;
 pub(crate) mod surrogate;
 pub(crate) mod validate;
