@@ -118,10 +118,11 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
 
 /// Ross's estimator in nats for labelled X and continuous Y (inputs validated by the caller).
 pub(crate) fn ross(levels: &Levels, y: &[f64], k: usize) -> f64 {
-    let mut order: Vec<u32> = (0..y.len() as u32).collect();
-    order.sort_unstable_by(|&a, &b| y[a as usize].total_cmp(&y[b as usize]));
-    let y_sorted: Vec<f64> = order.iter().map(|&i| y[i as usize]).collect();
-    let labels: Vec<u16> = order.iter().map(|&i| levels.labels[i as usize]).collect();
+    // Sorting the (value, label) pairs themselves compares in place, where sorting indices
+    // would fetch both values from elsewhere at every comparison.
+    let mut pairs: Vec<(f64, u16)> = y.iter().copied().zip(levels.labels.iter().copied()).collect();
+    pairs.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let (y_sorted, labels): (Vec<f64>, Vec<u16>) = pairs.into_iter().unzip();
     ross_sorted(&y_sorted, &labels, levels.count(), k)
 }
 

@@ -11,9 +11,11 @@
 //! The correlation between lags and statistics is thereby accounted for, not bounded.
 //!
 //! The steps, with the reasons:
-//! 1. **Calibration.** The first `calibration` surrogates give each (statistic, lag) its mean
-//!    and standard deviation. They are then set aside: the observed maximum and the null maxima
-//!    below are standardised by the same fixed numbers, so they stay exchangeable.
+//! 1. **Calibration.** The first `calibration` surrogates give each MI statistic at each lag its
+//!    mean and standard deviation. They are then set aside: the observed maximum and the null
+//!    maxima below are standardised by the same fixed numbers, so they stay exchangeable. The
+//!    cross-correlation under circular shifts is standardised by its exact moments over every
+//!    admissible shift instead ([`LaggedPair::linear_shift_moments`]).
 //! 2. **Null maxima, sequentially** (Besag and Clifford 1991). Surrogates are drawn in batches;
 //!    once `exceedances` of their maxima reach the observed one the element is clearly null and
 //!    stops with `p = h / l` (h exceedances in l surrogates), a valid p-value.
@@ -22,6 +24,9 @@
 //!    lies in the Gumbel domain of attraction, so a Gumbel fitted by moments to the null maxima
 //!    gives the p-value there (Knijnenburg et al. 2009 use a tail model the same way when fewer
 //!    than ten exceedances are seen). A clear mismatch stops early on the tail p-value.
+//!
+//! 4. **Shared surrogates.** Elements of one residual whose dithers are alike share one set
+//!    ([`family_test_group`]).
 //!
 //! Edge cases, named: a (statistic, lag) whose surrogate spread is zero carries no evidence and
 //! is left out of the maximum; the cross-correlation enters by its absolute standardised value

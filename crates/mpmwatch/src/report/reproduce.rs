@@ -484,8 +484,9 @@ pub fn claim_false_alarms(
     let runs: usize = study.iter().map(|s| s.1).sum();
     let alarms: usize = study.iter().map(|s| s.2).sum();
     let fraction = alarms as f64 / runs as f64;
+    let rate = crate::power::Rate::of(alarms, runs);
     let ours = format!(
-        "{} (seeds {}..{}); {:.1} % of {} runs in all.",
+        "{} (seeds {}..{}); {:.1} % of {} runs in all (95 % interval {:.1}–{:.1} %).",
         study
             .iter()
             .map(|(c, n, a)| format!("{c}: {a} of {n} runs flagged something"))
@@ -494,7 +495,9 @@ pub fn claim_false_alarms(
         opts.seed + 30_000,
         opts.seed + 30_000 + opts.matched_seeds as u64 - 1,
         100.0 * fraction,
-        runs
+        runs,
+        100.0 * rate.low,
+        100.0 * rate.high
     );
     let claim = Claim {
         id: 7,
