@@ -12,6 +12,7 @@ mod imc;
 mod mpc;
 mod nmpc;
 mod noise;
+pub mod physical_cases;
 mod pi;
 mod qp;
 pub mod scenarios;

@@ -2,3 +2,4 @@
 //! One test binary per crate, each test file a module, so the dependencies link once.
 
 mod diagnose_classes;
+mod physical_study;

@@ -1,0 +1,93 @@
+//! The open-loop physical cases (`mpmwatch_sim::physical_cases`) diagnosed as a user would:
+//! the nominal is an ARX model fitted by least squares on the record, the input is its own
+//! excitation. The study (ignored; `SEEDS=a..b N=3000 cargo test --release -p
+//! mpmwatch-diagnose study -- --ignored --nocapture`) prints one line per case and the rates.
+
+use mpmwatch_core::detect::Signal;
+use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
+use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, run};
+
+fn diagnose_record(r: &PhysicalRecord) -> Diagnosis {
+    let time: Vec<f64> = (0..r.y.len()).map(|k| k as f64).collect();
+    let input = DiagnoseInput {
+        time: &time,
+        inputs: vec![Signal { name: "u1", values: &r.u }],
+        excitations: None,
+        outputs: vec![Signal { name: "y1", values: &r.y }],
+        simulated: vec![Signal { name: "y1", values: &r.s }],
+        physical: Vec::new(),
+    };
+    diagnose(&input, &DiagnoseOptions::default()).expect("diagnosis")
+}
+
+/// What a diagnosis said about a case: the named physics (`none` without a finding) and the
+/// held-out FIT before and after.
+struct Outcome {
+    physics: &'static str,
+    before: f64,
+    after: f64,
+}
+
+fn outcome(d: &Diagnosis) -> Outcome {
+    let physics = d
+        .report
+        .findings
+        .iter()
+        .find(|f| f.physics != Physics::Unexplained)
+        .map_or("none", |f| f.physics.name());
+    let h = &d.report.holdout;
+    Outcome { physics, before: h.fit_before_pct["y1"], after: h.fit_after_pct["y1"] }
+}
+
+/// Right: a nonlinear case named by an accepted class; a linear plant with no finding or a
+/// linear change (gain, time constant, dead time), which a re-fit of the user's model may earn.
+fn is_right(case: PhysicalCase, physics: &str) -> bool {
+    if case.accepted().is_empty() {
+        return matches!(physics, "none" | "gain" | "time_constant" | "dead_time");
+    }
+    case.accepted().contains(&physics)
+}
+
+#[test]
+#[ignore]
+fn study() {
+    let seeds = std::env::var("SEEDS").unwrap_or_else(|_| "1..4".into());
+    let (a, b) = seeds.split_once("..").expect("SEEDS=a..b");
+    let (a, b): (u64, u64) = (a.parse().unwrap(), b.parse().unwrap());
+    let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
+    let only = std::env::var("CASE").ok();
+    let (mut right, mut total, mut worse) = (0, 0, 0);
+    for case in PhysicalCase::ALL {
+        if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str())) {
+            continue;
+        }
+        let mut case_right = 0;
+        for seed in a..b {
+            let r = run(case, n, seed).unwrap();
+            let d = diagnose_record(&r);
+            let o = outcome(&d);
+            let ok = is_right(case, o.physics);
+            let fell = o.physics != "none" && o.after < o.before;
+            total += 1;
+            right += usize::from(ok);
+            case_right += usize::from(ok);
+            worse += usize::from(fell);
+            let best = d.report.findings.first().map(|f| {
+                f.tried.iter().take(4).map(|t| format!("{} {:+.1}", t.physics.name(), t.validation_gain_pct)).collect::<Vec<_>>()
+            });
+            eprintln!(
+                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} | {} | tried {:?}",
+                case.name(),
+                if ok { "ok" } else { "NO" },
+                o.physics,
+                o.before,
+                o.after,
+                if fell { " FELL" } else { "" },
+                r.description,
+                best
+            );
+        }
+        eprintln!("== {}: {case_right}/{}", case.name(), b - a);
+    }
+    eprintln!("right {right}/{total}; findings whose held-out FIT fell: {worse}");
+}
