@@ -31,6 +31,7 @@ mod describe;
 mod error;
 mod fitness;
 mod frols;
+mod greybox;
 mod locate;
 mod nominal;
 mod physical;
@@ -429,6 +430,33 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 flagged = (0..input.inputs.len()).collect();
             }
             let ctx = &ctxs[cv];
+            if input.excitations.is_none() && input.physical.get(j).copied().flatten().is_none() {
+                let (y, s0) = (input.outputs[j].values, input.simulated[j].values);
+                let d = greybox::Data { u: u_all.clone(), y, train: 0..n_train };
+                let names = greybox::Names {
+                    inputs: input.inputs.iter().map(|u| u.name).collect(),
+                    output: input.outputs[j].name,
+                };
+                let e = greybox::explain(
+                    &d,
+                    s0,
+                    &ctx.model,
+                    &flagged,
+                    &split.folds,
+                    opts.warmup,
+                    opts.min_gain_pct,
+                    ts,
+                    &names,
+                );
+                if let Some(c) = e.corrected {
+                    corrected[j] = c;
+                }
+                let mut finding = e.finding;
+                finding.fit_before_pct = fit_pct(y, s0);
+                finding.fit_after_pct = fit_pct(y, &corrected[j]);
+                findings.push(finding);
+                continue;
+            }
             let inst = instrument_ctx(ctx, &u_driven);
             let r = &residuals[j];
             let scoring = if opts.scoring == Scoring::Shifted {

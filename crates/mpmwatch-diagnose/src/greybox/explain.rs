@@ -1,0 +1,243 @@
+//! From the grey-box hypotheses of one output to its finding: every class against the best
+//! re-fitted linear structure and the nominal, by blocked cross-validation in simulation mode.
+//!
+//! The rule, in the currency of the held-out FIT (simulation mode, out of sample):
+//! - a physics element is named when its cross-validated FIT beats the linear re-fit's by
+//!   [`NONLINEAR_MARGIN`] points and the nominal's by the caller's margin;
+//! - otherwise the linear re-fit is the finding (a gain, a time constant or a dead time,
+//!   whichever it changes most) when it beats the nominal by the caller's margin;
+//! - otherwise the finding is `unexplained`, naming the best candidate and its gain.
+//!
+//! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
+
+use std::collections::BTreeMap;
+
+use super::{Data, Element, Fitted, Linear, Model, Orders, cv_fit, elements, fit, linear_orders, nominal_cv_fit};
+use crate::candidates::{ActsOn, Physics};
+use crate::nominal::NominalArx;
+use crate::report::{Finding, Tried};
+
+/// Points of cross-validated FIT a physics element must gain over the re-fitted linear model:
+/// an element nests the linear model, so on a linear plant it gains by fitting noise, about
+/// its extra parameters' share of the validation error (a few per 1000 samples of it); a
+/// point is well above that and well below what a physics element of the casebook's size
+/// gains.
+pub const NONLINEAR_MARGIN: f64 = 1.0;
+
+/// Points of cross-validated FIT within which the element with fewer parameters is preferred.
+pub const PARSIMONY: f64 = 0.5;
+
+/// What the grey-box step decided for one output.
+pub struct Explanation {
+    /// The finding (its FIT fields are the caller's to fill).
+    pub finding: Finding,
+    /// The corrected simulation over the whole record (`None`: no correction).
+    pub corrected: Option<Vec<f64>>,
+}
+
+/// Names of the signals, for the report.
+pub struct Names<'a> {
+    /// Input names, by position.
+    pub inputs: Vec<&'a str>,
+    /// The output's name.
+    pub output: &'a str,
+}
+
+/// Explains one output. `s` is the nominal simulation, `nominal` the nominal model identified
+/// from it, `flagged` the inputs the localisation implicated, `folds` the blocked folds of the
+/// training rows, `min_gain` the smallest gain in points that counts, `ts` the sample time.
+#[allow(clippy::too_many_arguments)]
+pub fn explain(
+    d: &Data<'_>,
+    s: &[f64],
+    nominal: &NominalArx,
+    flagged: &[usize],
+    folds: &[(Vec<usize>, std::ops::Range<usize>)],
+    warmup: usize,
+    min_gain: f64,
+    ts: f64,
+    names: &Names<'_>,
+) -> Explanation {
+    let nominal_cv = nominal_cv_fit(s, d.y, folds);
+    let linear = linear_orders(d, folds);
+    let mut tried: Vec<Tried> = Vec::new();
+    let mut scored: Vec<(f64, usize, usize, usize)> = Vec::new();
+    let els = elements();
+    if let Some((orders, _)) = &linear {
+        for (k, el) in els.iter().enumerate() {
+            let inputs: Vec<usize> = match el.acts_on() {
+                ActsOn::Input => flagged.to_vec(),
+                ActsOn::Output => flagged.iter().take(1).copied().collect(),
+            };
+            for &i in &inputs {
+                let m = Model { element: el.as_ref(), input: i, orders: orders.clone() };
+                let Some(v) = cv_fit(&m, d, folds) else { continue };
+                scored.push((v, k, i, complexity(el.as_ref(), d, i, orders)));
+            }
+        }
+    }
+    let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| l.1);
+    for &(v, k, _, _) in &scored {
+        let ph = els[k].physics();
+        match tried.iter_mut().find(|t| t.physics == ph) {
+            Some(t) if t.validation_gain_pct >= v - nominal_cv => {}
+            Some(t) => t.validation_gain_pct = v - nominal_cv,
+            None => tried.push(Tried { physics: ph, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv }),
+        }
+    }
+    let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
+    let best = scored.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max);
+    let chosen = scored
+        .iter()
+        .filter(|s| s.0 >= best - PARSIMONY)
+        .min_by(|a, b| a.3.cmp(&b.3).then(b.0.total_cmp(&a.0)))
+        .copied();
+    if let (Some((v, k, i, _)), Some((orders, _))) = (chosen, &linear)
+        && v - linear_cv >= NONLINEAR_MARGIN
+        && v - nominal_cv >= min_gain
+    {
+        let el = els[k].as_ref();
+        let m = Model { element: el, input: i, orders: orders.clone() };
+        if let Some(f) = fit(&m, d, &train_rows)
+            && let Some(sim) = m.simulate(&f, &d.u, d.y)
+        {
+            let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+            return Explanation { finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried), corrected: Some(sim) };
+        }
+    }
+    if let Some((orders, v)) = &linear
+        && v - nominal_cv >= min_gain
+    {
+        let m = Model { element: &Linear, input: 0, orders: orders.clone() };
+        if let Some(f) = fit(&m, d, &train_rows)
+            && let Some(sim) = m.simulate(&f, &d.u, d.y)
+        {
+            let i = flagged.first().copied().unwrap_or(0);
+            let (physics, summary, parameters) = linear_change(nominal, &f, orders, i, ts, names);
+            tried.push(Tried { physics, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv });
+            return Explanation { finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried), corrected: Some(sim) };
+        }
+    }
+    tried.sort_by(|a, b| b.validation_gain_pct.total_cmp(&a.validation_gain_pct));
+    let summary = match (tried.first(), &linear) {
+        (Some(t), Some((_, lv))) => format!(
+            "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points: the best candidate, {}, changes the cross-validated FIT by {:+.1} points, the re-fitted linear model by {:+.1}",
+            names.output,
+            t.physics.name(),
+            t.validation_gain_pct,
+            lv - nominal_cv
+        ),
+        _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
+    };
+    let i = flagged.first().copied().unwrap_or(0);
+    Explanation {
+        finding: finding(names, i, Physics::Unexplained, ActsOn::Input, summary, BTreeMap::new(), tried),
+        corrected: None,
+    }
+}
+
+fn finding(
+    names: &Names<'_>,
+    i: usize,
+    physics: Physics,
+    acts_on: ActsOn,
+    summary: String,
+    parameters: BTreeMap<String, f64>,
+    mut tried: Vec<Tried>,
+) -> Finding {
+    tried.sort_by(|a, b| b.validation_gain_pct.total_cmp(&a.validation_gain_pct));
+    Finding {
+        input: names.inputs[i].to_string(),
+        output: names.output.to_string(),
+        physics,
+        acts_on,
+        summary,
+        parameters,
+        fit_before_pct: f64::NAN,
+        fit_after_pct: f64::NAN,
+        tried,
+    }
+}
+
+/// Free parameters of an element on the linear orders.
+fn complexity(el: &dyn Element, d: &Data<'_>, i: usize, orders: &Orders) -> usize {
+    let p = el.starts(d, i).first().map_or(0, Vec::len);
+    let signals = el.signals(&vec![0.0; p], &d.u, i).len();
+    p + orders.na + signals * orders.nb + el.feedbacks() + 1
+}
+
+/// Response of input `i` through the linear part of a fitted linear structure to a unit step
+/// at sample 1 (as the nominal's channel is stepped).
+fn step(f: &Fitted, orders: &Orders, i: usize, n: usize) -> Vec<f64> {
+    let mut x = vec![0.0; n];
+    for t in 0..n {
+        let mut v = 0.0;
+        for k in 1..=orders.na.min(t) {
+            v += f.theta[k - 1] * x[t - k];
+        }
+        for k in 0..orders.nb {
+            if t > orders.nk[i] + k {
+                v += f.theta[orders.na + i * orders.nb + k];
+            }
+        }
+        x[t] = v;
+    }
+    x
+}
+
+/// Samples from the first move to 63 % of the final value of a step response.
+fn rise(step: &[f64]) -> (usize, f64) {
+    let fin = step.last().copied().unwrap_or(0.0);
+    if fin.abs() < 1e-300 {
+        return (0, 1.0);
+    }
+    let start = step.iter().position(|v| (v / fin).abs() > 1e-6).unwrap_or(0);
+    let t63 = step.iter().position(|v| v / fin >= 1.0 - (-1.0f64).exp()).unwrap_or(step.len() - 1);
+    (start, (t63.saturating_sub(start) as f64).max(0.5))
+}
+
+/// What a linear re-fit changes against the nominal, for input `i`: the dead time when the
+/// responses start at different samples, else the gain or the time constant, whichever moved
+/// most (as a log ratio).
+fn linear_change(
+    nominal: &NominalArx,
+    f: &Fitted,
+    orders: &Orders,
+    i: usize,
+    ts: f64,
+    names: &Names<'_>,
+) -> (Physics, String, BTreeMap<String, f64>) {
+    let n = 2000;
+    let mut u = vec![1.0; n];
+    u[0] = 0.0;
+    let s_new = step(f, orders, i, n);
+    let s_old = nominal.channel(i, &u);
+    let (d_new, tau_new) = rise(&s_new);
+    let (d_old, tau_old) = rise(&s_old);
+    let (g_new, g_old) = (s_new[n - 1], s_old[n - 1]);
+    let (inp, out) = (names.inputs[i], names.output);
+    if d_new != d_old {
+        let extra = (d_new as f64 - d_old as f64) * ts;
+        return (
+            Physics::DeadTime,
+            format!("{inp} reaches {out} after {:.3} s, the model says {:.3} s (dead time {extra:+.3} s)", d_new as f64 * ts, d_old as f64 * ts),
+            BTreeMap::from([("extra_dead_time_s".into(), extra)]),
+        );
+    }
+    let gain_ratio = g_new / g_old;
+    let tau_ratio = tau_new / tau_old;
+    let log = |r: f64| if r > 0.0 { r.ln().abs() } else { f64::INFINITY };
+    if log(gain_ratio) >= log(tau_ratio) {
+        (
+            Physics::Gain,
+            format!("the gain of {inp}→{out} is {g_new:.4}, the model's {g_old:.4} (×{gain_ratio:.2})"),
+            BTreeMap::from([("gain".into(), g_new), ("model_gain".into(), g_old)]),
+        )
+    } else {
+        (
+            Physics::TimeConstant,
+            format!("the time constant of {inp}→{out} is {:.3} s, the model's {:.3} s", tau_new * ts, tau_old * ts),
+            BTreeMap::from([("time_constant_s".into(), tau_new * ts), ("model_time_constant_s".into(), tau_old * ts)]),
+        )
+    }
+}

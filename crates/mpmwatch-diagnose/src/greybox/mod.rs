@@ -1,0 +1,413 @@
+//! Grey-box hypotheses for open-loop records: each is a model structure, linear dynamics
+//! re-estimated from the record composed with one physics element where it acts (a static map
+//! on an input, a map on the output, a force fed back from the output), fitted by minimising
+//! the simulation error. A re-fitted linear model always competes: a physics element is named
+//! only when it beats the best linear structure out of sample.
+//!
+//! The structure of every hypothesis, with `w_s` the signals the element makes of the inputs
+//! (the inputs themselves for a linear model) and `f_m` the forces it feeds back:
+//!
+//! ```text
+//! x(t) = Σ_k α_k x(t−k) + Σ_s Σ_k β_sk w_s(t−nk_s−k) + Σ_m γ_m f_m(x(t−1), x(t−2)) + c
+//! ŷ(t) = g(x(t))            (the element's output map; the identity for most)
+//! ```
+//!
+//! Fitting (see [`fit`]): least squares on the equation error gives the start (the recorded
+//! output stands in for `x` on the rows where the output map is invertible), then
+//! Levenberg–Marquardt (`levenberg-marquardt`) minimises the simulation error over every
+//! coefficient and the element's own parameters (a width, a limit), from each of the
+//! element's starting values. Choice (see [`explain`]): blocked cross-validation inside the
+//! training part, scored in simulation mode, the currency the held-out FIT is reported in.
+
+mod backlash;
+mod clip_sensor;
+mod dead_zone;
+mod explain;
+mod friction;
+mod linear;
+mod polynomial;
+mod saturation;
+mod stiffness;
+
+use std::collections::BTreeMap;
+
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+
+use super::candidates::{ActsOn, Physics};
+use super::fitness::fit_pct;
+use mpmwatch_core::numerics::{least_squares_rows, median, quantile};
+
+/// The record an element is fitted to: inputs, output and the training rows' summaries the
+/// elements start from.
+#[derive(Debug, Clone)]
+pub struct Data<'a> {
+    /// Inputs.
+    pub u: Vec<&'a [f64]>,
+    /// Recorded output.
+    pub y: &'a [f64],
+    /// Training rows (the held-out tail is after them and never seen).
+    pub train: std::ops::Range<usize>,
+}
+
+impl Data<'_> {
+    /// Quantile `q` of input `i` on the training rows.
+    pub fn u_quantile(&self, i: usize, q: f64) -> f64 {
+        quantile(&self.u[i][self.train.clone()], q)
+    }
+
+    /// Quantile `q` of the output on the training rows.
+    pub fn y_quantile(&self, q: f64) -> f64 {
+        quantile(&self.y[self.train.clone()], q)
+    }
+
+    /// Median of the output on the training rows.
+    pub fn y_median(&self) -> f64 {
+        median(&self.y[self.train.clone()])
+    }
+}
+
+/// One physics element composed with linear dynamics. Every class is one file implementing it.
+pub trait Element: Sync {
+    /// The vocabulary class.
+    fn physics(&self) -> Physics;
+    /// Where it acts.
+    fn acts_on(&self) -> ActsOn;
+    /// Starting values of the element's own parameters (empty vector: it has none), acting on
+    /// input `i`.
+    fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>>;
+    /// The signals the linear dynamics see, each with its own numerator: by default the inputs.
+    /// `i` is the input the element acts on.
+    fn signals(&self, _p: &[f64], u: &[&[f64]], _i: usize) -> Vec<Vec<f64>> {
+        u.iter().map(|x| x.to_vec()).collect()
+    }
+    /// Forces fed back from the simulated output (`x(t−1)`, `x(t−2)`).
+    fn feedback(&self, _p: &[f64], _x1: f64, _x2: f64, _out: &mut Vec<f64>) {}
+    /// How many forces [`Element::feedback`] returns.
+    fn feedbacks(&self) -> usize {
+        0
+    }
+    /// The output map `g`.
+    fn output(&self, _p: &[f64], x: f64) -> f64 {
+        x
+    }
+    /// Whether the recorded output at a row can stand in for `x` (the output map is the
+    /// identity there), for the equation-error start.
+    fn invertible(&self, _p: &[f64], _y: f64) -> bool {
+        true
+    }
+    /// A sentence and the parameters, for the report.
+    fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>);
+}
+
+/// The linear part's orders: `na` poles, and per input `nb` numerator taps after `nk` samples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Orders {
+    /// Poles.
+    pub na: usize,
+    /// Numerator taps per signal.
+    pub nb: usize,
+    /// Dead time per input, samples.
+    pub nk: Vec<usize>,
+}
+
+/// A fitted hypothesis: element parameters and the coefficients of the structure.
+#[derive(Debug, Clone)]
+pub struct Fitted {
+    /// The element's own parameters.
+    pub p: Vec<f64>,
+    /// `α`, then `β` per signal, then `γ`, then `c`.
+    pub theta: Vec<f64>,
+}
+
+/// A structure ready to simulate: an element on input `input`, with orders.
+pub struct Model<'e> {
+    /// The element.
+    pub element: &'e dyn Element,
+    /// The input it acts on.
+    pub input: usize,
+    /// The linear part's orders.
+    pub orders: Orders,
+}
+
+impl Model<'_> {
+    fn signals(&self, p: &[f64], u: &[&[f64]]) -> (Vec<Vec<f64>>, Vec<usize>) {
+        let sig = self.element.signals(p, u, self.input);
+        // The signals beyond the inputs (a polynomial's powers) are of the element's input and
+        // share its dead time.
+        let nk: Vec<usize> = (0..sig.len())
+            .map(|s| if s < u.len() { self.orders.nk[s] } else { self.orders.nk[self.input] })
+            .collect();
+        (sig, nk)
+    }
+
+    /// Coefficients in `theta`.
+    fn n_theta(&self, signals: usize) -> usize {
+        self.orders.na + signals * self.orders.nb + self.element.feedbacks() + 1
+    }
+
+    /// The first row every lag is inside the record.
+    fn first_row(&self, nk: &[usize]) -> usize {
+        let nkmax = nk.iter().copied().max().unwrap_or(0);
+        self.orders.na.max(nkmax + self.orders.nb).max(2)
+    }
+
+    /// Simulation of the output over the whole record, from the recorded output's first
+    /// samples as initial conditions. `None` when it diverges.
+    pub fn simulate(&self, f: &Fitted, u: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
+        let (sig, nk) = self.signals(&f.p, u);
+        let n = y.len();
+        let o = &self.orders;
+        let first = self.first_row(&nk).min(n);
+        let mut x: Vec<f64> = y[..first].to_vec();
+        x.resize(n, 0.0);
+        let scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let bound = 1e3 * scale;
+        let nf = self.element.feedbacks();
+        let fb0 = o.na + sig.len() * o.nb;
+        let mut fb = Vec::with_capacity(nf);
+        for t in first..n {
+            let mut v = f.theta[f.theta.len() - 1];
+            for k in 1..=o.na {
+                v += f.theta[k - 1] * x[t - k];
+            }
+            for (s, w) in sig.iter().enumerate() {
+                for k in 0..o.nb {
+                    v += f.theta[o.na + s * o.nb + k] * w[t - nk[s] - k];
+                }
+            }
+            if nf > 0 {
+                fb.clear();
+                self.element.feedback(&f.p, x[t - 1], x[t - 2], &mut fb);
+                for (m, g) in fb.iter().enumerate() {
+                    v += f.theta[fb0 + m] * g;
+                }
+            }
+            if !v.is_finite() || v.abs() > bound {
+                return None;
+            }
+            x[t] = v;
+        }
+        Some(x.iter().map(|&v| self.element.output(&f.p, v)).collect())
+    }
+
+    /// The equation-error least-squares fit of the coefficients, the element's parameters
+    /// fixed at `p`, on `rows` where the output map is invertible.
+    fn equation_error(&self, p: &[f64], u: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Fitted> {
+        let (sig, nk) = self.signals(p, u);
+        let o = &self.orders;
+        let first = self.first_row(&nk);
+        let n = y.len();
+        let mut cols: Vec<Vec<f64>> = Vec::new();
+        let lagged = |x: &[f64], k: usize| -> Vec<f64> { (0..n).map(|t| if t >= k { x[t - k] } else { x[0] }).collect() };
+        for k in 1..=o.na {
+            cols.push(lagged(y, k));
+        }
+        for (s, w) in sig.iter().enumerate() {
+            for k in 0..o.nb {
+                cols.push(lagged(w, nk[s] + k));
+            }
+        }
+        let nf = self.element.feedbacks();
+        if nf > 0 {
+            let mut f = vec![vec![0.0; n]; nf];
+            let mut buf = Vec::with_capacity(nf);
+            for t in 2..n {
+                buf.clear();
+                self.element.feedback(p, y[t - 1], y[t - 2], &mut buf);
+                for (m, g) in buf.iter().enumerate() {
+                    f[m][t] = *g;
+                }
+            }
+            cols.extend(f);
+        }
+        cols.push(vec![1.0; n]);
+        let ok = |t: usize| (0..=o.na).all(|k| t >= k && self.element.invertible(p, y[t - k]));
+        let used: Vec<usize> = rows.iter().copied().filter(|&t| t >= first && ok(t)).collect();
+        if used.len() < 3 * cols.len() {
+            return None;
+        }
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let theta = least_squares_rows(&refs, y, &used)?;
+        debug_assert_eq!(theta.len(), self.n_theta(sig.len()));
+        Some(Fitted { p: p.to_vec(), theta })
+    }
+}
+
+/// The simulation-error problem handed to Levenberg–Marquardt: parameters `[p, θ]`.
+struct SimError<'a, 'e> {
+    model: &'a Model<'e>,
+    u: &'a [&'a [f64]],
+    y: &'a [f64],
+    rows: &'a [usize],
+    n_p: usize,
+    x: DVector<f64>,
+    /// The residual of a diverging simulation: large, finite, so the step is rejected.
+    blowup: f64,
+}
+
+impl SimError<'_, '_> {
+    fn fitted(&self, x: &DVector<f64>) -> Fitted {
+        Fitted { p: x.as_slice()[..self.n_p].to_vec(), theta: x.as_slice()[self.n_p..].to_vec() }
+    }
+
+    fn residual_at(&self, x: &DVector<f64>) -> DVector<f64> {
+        match self.model.simulate(&self.fitted(x), self.u, self.y) {
+            Some(s) => DVector::from_iterator(self.rows.len(), self.rows.iter().map(|&t| s[t] - self.y[t])),
+            None => DVector::from_element(self.rows.len(), self.blowup),
+        }
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for SimError<'_, '_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        self.x.copy_from(x);
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.x.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        Some(self.residual_at(&self.x))
+    }
+
+    /// Forward differences, one simulation per parameter (the crate's own numerical
+    /// derivative re-simulates once per residual, which is quadratic in the record's length).
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        let r0 = self.residual_at(&self.x);
+        let mut j = DMatrix::zeros(r0.len(), self.x.len());
+        for k in 0..self.x.len() {
+            let mut x = self.x.clone();
+            let h = 1e-6 * self.x[k].abs().max(1e-3);
+            x[k] += h;
+            let r = self.residual_at(&x);
+            j.set_column(k, &((r - &r0) / h));
+        }
+        Some(j)
+    }
+}
+
+/// Fits a model on `rows` by simulation error: the equation-error start at each of the
+/// element's starting values, refined by Levenberg–Marquardt; the fit with the least
+/// simulation error on `rows` wins. `None` when no start gives a stable simulation.
+pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
+    let mut starts = model.element.starts(d, model.input);
+    if starts.is_empty() {
+        starts.push(Vec::new());
+    }
+    let scale = mpmwatch_core::numerics::std_dev(&d.y[d.train.clone()], 0).max(1e-12);
+    let sse = |f: &Fitted| -> Option<f64> {
+        let s = model.simulate(f, &d.u, d.y)?;
+        let e: f64 = rows.iter().map(|&t| (s[t] - d.y[t]).powi(2)).sum();
+        e.is_finite().then_some(e)
+    };
+    let mut best: Option<(f64, Fitted)> = None;
+    for p in starts {
+        let Some(start) = model.equation_error(&p, &d.u, d.y, rows) else { continue };
+        let mut candidates = vec![start.clone()];
+        let n_p = p.len();
+        let x0 = DVector::from_iterator(n_p + start.theta.len(), p.iter().chain(&start.theta).copied());
+        let problem = SimError { model, u: &d.u, y: d.y, rows, n_p, x: x0, blowup: 1e3 * scale };
+        // A simulation that diverges from the equation-error start has nothing to refine.
+        if sse(&start).is_some() {
+            let (solved, _) = LevenbergMarquardt::new().with_patience(30).minimize(problem);
+            candidates.push(solved.fitted(&solved.x));
+        }
+        for c in candidates {
+            if let Some(e) = sse(&c)
+                && best.as_ref().is_none_or(|b| e < b.0)
+            {
+                best = Some((e, c));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// The classes, in the order of their parsimony (a later class must beat an earlier one by
+/// the margin to be preferred at equal fit).
+pub fn elements() -> Vec<Box<dyn Element>> {
+    vec![
+        Box::new(dead_zone::DeadZone),
+        Box::new(saturation::InputSaturation),
+        Box::new(clip_sensor::ClipSensor),
+        Box::new(polynomial::Polynomial { degree: 2 }),
+        Box::new(stiffness::CubicStiffness),
+        Box::new(friction::Coulomb { on_change: false }),
+        Box::new(friction::Coulomb { on_change: true }),
+        Box::new(backlash::Backlash),
+        Box::new(polynomial::Polynomial { degree: 3 }),
+    ]
+}
+
+pub use explain::{Names, explain};
+pub use linear::Linear;
+
+/// The pooled FIT% of a model over the validation blocks of `folds`, each block simulated by
+/// the model fitted on the other rows.
+pub fn cv_fit(model: &Model<'_>, d: &Data<'_>, folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> Option<f64> {
+    let (mut yv, mut sv) = (Vec::new(), Vec::new());
+    for (fit_rows, block) in folds {
+        let f = fit(model, d, fit_rows)?;
+        let s = model.simulate(&f, &d.u, d.y)?;
+        yv.extend(block.clone().map(|t| d.y[t]));
+        sv.extend(block.clone().map(|t| s[t]));
+    }
+    let v = fit_pct(&yv, &sv);
+    v.is_finite().then_some(v)
+}
+
+/// The nominal's pooled FIT% over the same validation blocks.
+pub fn nominal_cv_fit(s: &[f64], y: &[f64], folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> f64 {
+    let yv: Vec<f64> = folds.iter().flat_map(|(_, b)| b.clone().map(|t| y[t])).collect();
+    let sv: Vec<f64> = folds.iter().flat_map(|(_, b)| b.clone().map(|t| s[t])).collect();
+    fit_pct(&yv, &sv)
+}
+
+/// The best linear orders by blocked cross-validation: dead times by the equation-error
+/// simulation on the training rows, input by input, then poles and taps by cross-validation.
+pub fn linear_orders(d: &Data<'_>, folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> Option<(Orders, f64)> {
+    let lin = Linear;
+    let rows: Vec<usize> = d.train.clone().collect();
+    let mut nk = vec![1usize; d.u.len()];
+    let sim_err = |orders: &Orders| -> f64 {
+        let m = Model { element: &lin, input: 0, orders: orders.clone() };
+        m.equation_error(&[], &d.u, d.y, &rows)
+            .and_then(|f| m.simulate(&f, &d.u, d.y))
+            .map_or(f64::INFINITY, |s| rows.iter().map(|&t| (s[t] - d.y[t]).powi(2)).sum())
+    };
+    for i in 0..d.u.len() {
+        let mut best = (f64::INFINITY, 1);
+        for k in 0..=MAX_DEAD_TIME {
+            let mut o = Orders { na: 2, nb: 2, nk: nk.clone() };
+            o.nk[i] = k;
+            let e = sim_err(&o);
+            if e < best.0 {
+                best = (e, k);
+            }
+        }
+        nk[i] = best.1;
+    }
+    let mut best: Option<(Orders, f64)> = None;
+    for na in 1..=3 {
+        for nb in 1..=3 {
+            let orders = Orders { na, nb, nk: nk.clone() };
+            let m = Model { element: &lin, input: 0, orders: orders.clone() };
+            let Some(v) = cv_fit(&m, d, folds) else { continue };
+            // One more pole or tap must earn a tenth of a point.
+            let penalised = v - 0.1 * (na + nb) as f64;
+            if best.as_ref().is_none_or(|b| penalised > b.1 - 0.1 * (b.0.na + b.0.nb) as f64) {
+                best = Some((orders, v));
+            }
+        }
+    }
+    best
+}
+
+/// Longest dead time searched, samples.
+pub const MAX_DEAD_TIME: usize = 20;
