@@ -214,7 +214,13 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let share = uniform(&mut rng, 0.15, 0.8);
             let k3 = share / (amp * amp);
             let (x, _) = oscillator(&u, omega, zeta, 8, |x, _| -omega * omega * k3 * x.powi(3));
-            (u, x, format!("ω {omega:.3}, ζ {zeta:.2}, cubic force {share:.2} of the linear at the input's amplitude"))
+            (
+                u,
+                x,
+                format!(
+                    "ω {omega:.3}, ζ {zeta:.2}, cubic force {share:.2} of the linear at the input's amplitude"
+                ),
+            )
         }
         PhysicalCase::FrictionMass => {
             let a = uniform(&mut rng, 0.8, 0.97);
@@ -263,7 +269,11 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             sorted.sort_by(f64::total_cmp);
             let q = uniform(&mut rng, 0.6, 0.85);
             let hi = sorted[(q * (n - 1) as f64) as usize];
-            (u, x.iter().map(|v| v.min(hi)).collect(), format!("ω {omega:.3}, ζ {zeta:.2}, sensor clips above its {:.0} % quantile", 100.0 * q))
+            (
+                u,
+                x.iter().map(|v| v.min(hi)).collect(),
+                format!("ω {omega:.3}, ζ {zeta:.2}, sensor clips above its {:.0} % quantile", 100.0 * q),
+            )
         }
         PhysicalCase::DiodeCircuit => {
             let (a1, a2) = (uniform(&mut rng, 0.5, 0.95), uniform(&mut rng, 0.3, 0.9));
@@ -302,7 +312,14 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let q = uniform(&mut rng, 0.7, 0.9);
             let rim = sorted[(q * (n - 1) as f64) as usize];
             let (x, _) = run_tanks(rim);
-            (u, x, format!("outflows {k1:.3}, {k2:.3}, pump {pump:.3}, rim at the upper level's {:.0} % quantile", 100.0 * q))
+            (
+                u,
+                x,
+                format!(
+                    "outflows {k1:.3}, {k2:.3}, pump {pump:.3}, rim at the upper level's {:.0} % quantile",
+                    100.0 * q
+                ),
+            )
         }
         PhysicalCase::ActuatorDeadZone => {
             let (omega, zeta) = (uniform(&mut rng, 0.05, 0.4), uniform(&mut rng, 0.5, 1.5));
@@ -346,7 +363,10 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
         u,
         y,
         s,
-        description: format!("{description}; noise AR(1) pole {pole:.2}, {:.0} % of the variance", 100.0 * share),
+        description: format!(
+            "{description}; noise AR(1) pole {pole:.2}, {:.0} % of the variance",
+            100.0 * share
+        ),
         noise_share: share,
     })
 }

@@ -40,7 +40,11 @@ impl Element for DeadZone {
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
-            format!("{input} has no effect on {output} within ±{:.3} of {:.3} (a dead zone)", p[1].abs(), p[0]),
+            format!(
+                "{input} has no effect on {output} within ±{:.3} of {:.3} (a dead zone)",
+                p[1].abs(),
+                p[0]
+            ),
             BTreeMap::from([("width".into(), p[1].abs()), ("centre".into(), p[0])]),
         )
     }

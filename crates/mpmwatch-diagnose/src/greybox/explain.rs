@@ -12,7 +12,9 @@
 
 use std::collections::BTreeMap;
 
-use super::{Data, Element, Fitted, Linear, Model, Orders, cv_fit, elements, fit, linear_orders, nominal_cv_fit};
+use super::{
+    Data, Element, Fitted, Linear, Model, Orders, cv_fit, elements, fit, linear_orders, nominal_cv_fit,
+};
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
 use crate::report::{Finding, Tried};
@@ -82,7 +84,9 @@ pub fn explain(
         match tried.iter_mut().find(|t| t.physics == ph) {
             Some(t) if t.validation_gain_pct >= v - nominal_cv => {}
             Some(t) => t.validation_gain_pct = v - nominal_cv,
-            None => tried.push(Tried { physics: ph, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv }),
+            None => {
+                tried.push(Tried { physics: ph, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv })
+            }
         }
     }
     let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
@@ -102,7 +106,10 @@ pub fn explain(
             && let Some(sim) = m.simulate(&f, &d.u, d.y)
         {
             let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
-            return Explanation { finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried), corrected: Some(sim) };
+            return Explanation {
+                finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried),
+                corrected: Some(sim),
+            };
         }
     }
     if let Some((orders, v)) = &linear
@@ -115,7 +122,10 @@ pub fn explain(
             let i = flagged.first().copied().unwrap_or(0);
             let (physics, summary, parameters) = linear_change(nominal, &f, orders, i, ts, names);
             tried.push(Tried { physics, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv });
-            return Explanation { finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried), corrected: Some(sim) };
+            return Explanation {
+                finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
+                corrected: Some(sim),
+            };
         }
     }
     tried.sort_by(|a, b| b.validation_gain_pct.total_cmp(&a.validation_gain_pct));
@@ -220,7 +230,11 @@ fn linear_change(
         let extra = (d_new as f64 - d_old as f64) * ts;
         return (
             Physics::DeadTime,
-            format!("{inp} reaches {out} after {:.3} s, the model says {:.3} s (dead time {extra:+.3} s)", d_new as f64 * ts, d_old as f64 * ts),
+            format!(
+                "{inp} reaches {out} after {:.3} s, the model says {:.3} s (dead time {extra:+.3} s)",
+                d_new as f64 * ts,
+                d_old as f64 * ts
+            ),
             BTreeMap::from([("extra_dead_time_s".into(), extra)]),
         );
     }
@@ -236,8 +250,15 @@ fn linear_change(
     } else {
         (
             Physics::TimeConstant,
-            format!("the time constant of {inp}→{out} is {:.3} s, the model's {:.3} s", tau_new * ts, tau_old * ts),
-            BTreeMap::from([("time_constant_s".into(), tau_new * ts), ("model_time_constant_s".into(), tau_old * ts)]),
+            format!(
+                "the time constant of {inp}→{out} is {:.3} s, the model's {:.3} s",
+                tau_new * ts,
+                tau_old * ts
+            ),
+            BTreeMap::from([
+                ("time_constant_s".into(), tau_new * ts),
+                ("model_time_constant_s".into(), tau_old * ts),
+            ]),
         )
     }
 }

@@ -199,7 +199,9 @@ impl Model<'_> {
         let first = self.first_row(&nk);
         let n = y.len();
         let mut cols: Vec<Vec<f64>> = Vec::new();
-        let lagged = |x: &[f64], k: usize| -> Vec<f64> { (0..n).map(|t| if t >= k { x[t - k] } else { x[0] }).collect() };
+        let lagged = |x: &[f64], k: usize| -> Vec<f64> {
+            (0..n).map(|t| if t >= k { x[t - k] } else { x[0] }).collect()
+        };
         for k in 1..=o.na {
             cols.push(lagged(y, k));
         }
@@ -350,7 +352,11 @@ pub use linear::Linear;
 
 /// The pooled FIT% of a model over the validation blocks of `folds`, each block simulated by
 /// the model fitted on the other rows.
-pub fn cv_fit(model: &Model<'_>, d: &Data<'_>, folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> Option<f64> {
+pub fn cv_fit(
+    model: &Model<'_>,
+    d: &Data<'_>,
+    folds: &[(Vec<usize>, std::ops::Range<usize>)],
+) -> Option<f64> {
     let (mut yv, mut sv) = (Vec::new(), Vec::new());
     for (fit_rows, block) in folds {
         let f = fit(model, d, fit_rows)?;

@@ -36,6 +36,11 @@ impl Element for Polynomial {
     }
     fn describe(&self, _p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let what = if self.degree == 2 { "square" } else { "cube" };
-        (format!("{output} responds to the {what} of {input}'s deviation, not only to {input} (a static polynomial map on the input)"), BTreeMap::new())
+        (
+            format!(
+                "{output} responds to the {what} of {input}'s deviation, not only to {input} (a static polynomial map on the input)"
+            ),
+            BTreeMap::new(),
+        )
     }
 }

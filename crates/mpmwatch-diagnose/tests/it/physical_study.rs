@@ -73,7 +73,11 @@ fn study() {
             case_right += usize::from(ok);
             worse += usize::from(fell);
             let best = d.report.findings.first().map(|f| {
-                f.tried.iter().take(4).map(|t| format!("{} {:+.1}", t.physics.name(), t.validation_gain_pct)).collect::<Vec<_>>()
+                f.tried
+                    .iter()
+                    .take(4)
+                    .map(|t| format!("{} {:+.1}", t.physics.name(), t.validation_gain_pct))
+                    .collect::<Vec<_>>()
             });
             eprintln!(
                 "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} | {} | tried {:?}",
