@@ -7,7 +7,7 @@ use mpmwatch_core::detect::Signal;
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
 use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, run};
 
-fn diagnose_record(r: &PhysicalRecord) -> Diagnosis {
+pub(crate) fn diagnose_record(r: &PhysicalRecord) -> Diagnosis {
     let time: Vec<f64> = (0..r.y.len()).map(|k| k as f64).collect();
     let input = DiagnoseInput {
         time: &time,
