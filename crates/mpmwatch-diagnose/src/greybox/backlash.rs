@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{Data, Element};
+use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
 /// The play operator of total width `w`; parameter `[w]`.
@@ -36,7 +36,7 @@ impl Element for Backlash {
         [0.05, 0.15, 0.3].iter().map(|f| vec![f * r]).collect()
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
-        u.iter().enumerate().map(|(k, x)| if k == i { play(x, p[0]) } else { x.to_vec() }).collect()
+        map_input(u, i, |x| play(x, p[0]))
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{Data, Element};
+use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
 /// `dz(u) = sign(u − c)·max(|u − c| − w, 0)`, parameters `[c, w]`.
@@ -33,10 +33,7 @@ impl Element for DeadZone {
         centres.iter().flat_map(|&c| [0.1, 0.25, 0.4].map(|f| vec![c, f * half])).collect()
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
-        u.iter()
-            .enumerate()
-            .map(|(k, x)| if k == i { x.iter().map(|&v| map(v, p[0], p[1])).collect() } else { x.to_vec() })
-            .collect()
+        map_input(u, i, |x| x.iter().map(|&v| map(v, p[0], p[1])).collect())
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (

@@ -100,6 +100,14 @@ pub trait Element: Sync {
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>);
 }
 
+/// The inputs with input `i` replaced by `map` of it: what an element on one input makes of
+/// the inputs.
+pub fn map_input(u: &[&[f64]], i: usize, map: impl FnOnce(&[f64]) -> Vec<f64>) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = u.iter().map(|x| x.to_vec()).collect();
+    out[i] = map(u[i]);
+    out
+}
+
 /// The linear part's orders: `na` poles, and per input `nb` numerator taps after `nk` samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Orders {

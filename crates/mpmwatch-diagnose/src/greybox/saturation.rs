@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{Data, Element};
+use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
 /// `clamp(u, lo, hi)`, parameters `[lo, hi]` (a limit outside the input's range is inactive).
@@ -30,10 +30,7 @@ impl Element for InputSaturation {
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
-        u.iter()
-            .enumerate()
-            .map(|(k, x)| if k == i { x.iter().map(|v| v.clamp(lo, hi)).collect() } else { x.to_vec() })
-            .collect()
+        map_input(u, i, |x| x.iter().map(|v| v.clamp(lo, hi)).collect())
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
