@@ -163,6 +163,10 @@ impl Model<'_> {
     /// Simulation of the output over the whole record, from the recorded output's first
     /// samples as initial conditions. `None` when it diverges.
     pub fn simulate(&self, f: &Fitted, u: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
+        // An optimiser step may leave a parameter non-finite; the maps (a clamp) must not see it.
+        if f.p.iter().chain(&f.theta).any(|v| !v.is_finite()) {
+            return None;
+        }
         let (sig, nk) = self.signals(&f.p, u);
         let n = y.len();
         let o = &self.orders;
