@@ -44,6 +44,7 @@ use std::collections::BTreeMap;
 pub use candidates::{ActsOn, Physics};
 pub use error::DiagnoseError;
 pub use fitness::fit_pct;
+pub use greybox::{FittedGreyBox, GreyBox, Structure};
 pub use nominal::{NominalArx, identify as identify_nominal};
 pub use physical::{LEVEL_QUANTILES, PhysicalModel};
 pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
@@ -432,7 +433,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             let ctx = &ctxs[cv];
             if input.excitations.is_none() && input.physical.get(j).copied().flatten().is_none() {
                 let (y, s0) = (input.outputs[j].values, input.simulated[j].values);
-                let d = greybox::Data { u: u_all.clone(), y, train: 0..n_train };
+                let d = greybox::Data { u: u_all.clone(), y, train: 0..n_train, nominal: Some(s0) };
                 let names = greybox::Names {
                     inputs: input.inputs.iter().map(|u| u.name).collect(),
                     output: input.outputs[j].name,

@@ -8,6 +8,7 @@
 
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod benchmark;
 pub mod demo;
 pub mod loadgen;

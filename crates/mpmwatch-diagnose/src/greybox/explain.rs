@@ -61,11 +61,25 @@ pub fn explain(
     names: &Names<'_>,
 ) -> Explanation {
     let nominal_cv = nominal_cv_fit(s, d.y, folds);
-    let linear = linear_orders(d, folds);
+    // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
+    // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders are
+    // the user's knowledge of the plant). The linear model competes at both.
+    let mut linear = linear_orders(d, folds);
+    let from_nominal = nominal_orders(nominal, d.u.len());
+    let mut order_sets: Vec<Orders> = linear.iter().map(|l| l.0.clone()).collect();
+    if !order_sets.contains(&from_nominal) {
+        let m = Model { element: &Linear, input: 0, orders: from_nominal.clone() };
+        if let Some(v) = cv_fit(&m, d, folds) {
+            if linear.as_ref().is_none_or(|l| v > l.1) {
+                linear = Some((from_nominal.clone(), v));
+            }
+            order_sets.push(from_nominal);
+        }
+    }
     let mut tried: Vec<Tried> = Vec::new();
-    let mut scored: Vec<(f64, usize, usize, usize)> = Vec::new();
+    let mut scored: Vec<(f64, usize, usize, usize, usize)> = Vec::new();
     let els = elements();
-    if let Some((orders, _)) = &linear {
+    for (o, orders) in order_sets.iter().enumerate() {
         for (k, el) in els.iter().enumerate() {
             let inputs: Vec<usize> = match el.acts_on() {
                 ActsOn::Input => flagged.to_vec(),
@@ -74,12 +88,12 @@ pub fn explain(
             for &i in &inputs {
                 let m = Model { element: el.as_ref(), input: i, orders: orders.clone() };
                 let Some(v) = cv_fit(&m, d, folds) else { continue };
-                scored.push((v, k, i, complexity(el.as_ref(), d, i, orders)));
+                scored.push((v, k, i, complexity(el.as_ref(), d, i, orders), o));
             }
         }
     }
     let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| l.1);
-    for &(v, k, _, _) in &scored {
+    for &(v, k, _, _, _) in &scored {
         let ph = els[k].physics();
         match tried.iter_mut().find(|t| t.physics == ph) {
             Some(t) if t.validation_gain_pct >= v - nominal_cv => {}
@@ -96,12 +110,12 @@ pub fn explain(
         .filter(|s| s.0 >= best - PARSIMONY)
         .min_by(|a, b| a.3.cmp(&b.3).then(b.0.total_cmp(&a.0)))
         .copied();
-    if let (Some((v, k, i, _)), Some((orders, _))) = (chosen, &linear)
+    if let Some((v, k, i, _, o)) = chosen
         && v - linear_cv >= NONLINEAR_MARGIN
         && v - nominal_cv >= min_gain
     {
         let el = els[k].as_ref();
-        let m = Model { element: el, input: i, orders: orders.clone() };
+        let m = Model { element: el, input: i, orders: order_sets[o].clone() };
         if let Some(f) = fit(&m, d, &train_rows)
             && let Some(sim) = m.simulate(&f, &d.u, d.y)
         {
@@ -167,6 +181,25 @@ fn finding(
         fit_after_pct: f64::NAN,
         tried,
     }
+}
+
+/// The nominal's linear orders as the grey-box structure writes them: its poles (1 to 3), and
+/// per input the dead time before the first numerator coefficient above a thousandth of the
+/// largest, with up to 3 taps after it (the same for every input: the longest).
+fn nominal_orders(nominal: &NominalArx, inputs: usize) -> Orders {
+    let na = nominal.arx.denominator().len().saturating_sub(1).clamp(1, 3);
+    let mut nb = 1;
+    let nk = (0..inputs)
+        .map(|i| {
+            let b = nominal.arx.numerator(i);
+            let top = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let first = b.iter().position(|v| v.abs() > 1e-3 * top).unwrap_or(0);
+            let last = b.iter().rposition(|v| v.abs() > 1e-3 * top).unwrap_or(first);
+            nb = nb.max((last - first + 1).min(3));
+            first.min(super::MAX_DEAD_TIME)
+        })
+        .collect();
+    Orders { na, nb, nk }
 }
 
 /// Free parameters of an element on the linear orders.

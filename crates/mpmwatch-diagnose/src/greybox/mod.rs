@@ -19,6 +19,7 @@
 //! element's starting values. Choice (see [`explain`]): blocked cross-validation inside the
 //! training part, scored in simulation mode, the currency the held-out FIT is reported in.
 
+mod abs_sensor;
 mod backlash;
 mod clip_sensor;
 mod dead_zone;
@@ -28,6 +29,7 @@ mod linear;
 mod polynomial;
 mod saturation;
 mod stiffness;
+mod structure;
 
 use std::collections::BTreeMap;
 
@@ -48,6 +50,9 @@ pub struct Data<'a> {
     pub y: &'a [f64],
     /// Training rows (the held-out tail is after them and never seen).
     pub train: std::ops::Range<usize>,
+    /// The nominal simulation, when there is one: what the user's model says the output does,
+    /// a start for what the recorded output cannot show (a direction).
+    pub nominal: Option<&'a [f64]>,
 }
 
 impl Data<'_> {
@@ -95,6 +100,12 @@ pub trait Element: Sync {
     /// identity there), for the equation-error start.
     fn invertible(&self, _p: &[f64], _y: f64) -> bool {
         true
+    }
+    /// What stands in for `x` in the equation-error start when the output map loses
+    /// information the recorded output cannot give back (a sign): one start per stand-in.
+    /// Empty: the recorded output itself.
+    fn stand_ins(&self, _d: &Data<'_>, _i: usize, _p: &[f64]) -> Vec<Vec<f64>> {
+        Vec::new()
     }
     /// A sentence and the parameters, for the report.
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>);
@@ -204,7 +215,8 @@ impl Model<'_> {
     }
 
     /// The equation-error least-squares fit of the coefficients, the element's parameters
-    /// fixed at `p`, on `rows` where the output map is invertible.
+    /// fixed at `p`, on `rows` where the output map is invertible; `y` is the recorded output
+    /// or what stands in for `x`.
     fn equation_error(&self, p: &[f64], u: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Fitted> {
         let (sig, nk) = self.signals(p, u);
         let o = &self.orders;
@@ -321,8 +333,15 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
         e.is_finite().then_some(e)
     };
     let mut best: Option<(f64, Fitted)> = None;
-    for p in starts {
-        let Some(start) = model.equation_error(&p, &d.u, d.y, rows) else { continue };
+    let tries = starts.into_iter().flat_map(|p| {
+        let mut targets = model.element.stand_ins(d, model.input, &p);
+        if targets.is_empty() {
+            targets.push(d.y.to_vec());
+        }
+        targets.into_iter().map(move |t| (p.clone(), t))
+    });
+    for (p, target) in tries {
+        let Some(start) = model.equation_error(&p, &d.u, &target, rows) else { continue };
         let mut candidates = vec![start.clone()];
         let n_p = p.len();
         let x0 = DVector::from_iterator(n_p + start.theta.len(), p.iter().chain(&start.theta).copied());
@@ -350,6 +369,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(dead_zone::DeadZone),
         Box::new(saturation::InputSaturation),
         Box::new(clip_sensor::ClipSensor),
+        Box::new(abs_sensor::AbsSensor),
         Box::new(polynomial::Polynomial { degree: 2 }),
         Box::new(stiffness::CubicStiffness),
         Box::new(friction::Coulomb { on_change: false }),
@@ -361,6 +381,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
 
 pub use explain::{Names, explain};
 pub use linear::Linear;
+pub use structure::{FittedGreyBox, GreyBox, Structure};
 
 /// The pooled FIT% of a model over the validation blocks of `folds`, each block simulated by
 /// the model fitted on the other rows.
@@ -447,7 +468,7 @@ mod tests {
         for t in 2..u.len() {
             y[t] = 0.8 * y[t - 1] + 0.5 * w[t - 2];
         }
-        let d = Data { u: vec![&u], y: &y, train: 0..1200 };
+        let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None };
         let el = dead_zone::DeadZone;
         let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2] } };
         let rows: Vec<usize> = (10..1200).collect();
@@ -468,7 +489,7 @@ mod tests {
         for t in 2..u.len() {
             y[t] = 1.6 * y[t - 1] - 0.7 * y[t - 2] + 0.05 * u[t - 1] - 0.02 * y[t - 1].powi(3);
         }
-        let d = Data { u: vec![&u], y: &y, train: 0..1500 };
+        let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal: None };
         let el = stiffness::CubicStiffness;
         let m = Model { element: &el, input: 0, orders: Orders { na: 2, nb: 1, nk: vec![1] } };
         let rows: Vec<usize> = (10..1500).collect();

@@ -183,6 +183,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             }
         }
+        md.push_str(&benchmark_accuracy(&args.data, &mut real));
         md.push_str("\nData: Silverbox and cascaded tanks from the nonlinear system-identification benchmarks (Wigren & Schoukens; Schoukens, Mattsson, Wigren & Noël 2016, CC BY-SA 4.0), coupled electric drives (Wigren & Schoukens, Uppsala University 2017), TCLab (BSD-3).\n");
     }
     std::fs::write(args.out.join("casebook.md"), md)?;
@@ -190,6 +191,43 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     std::fs::write(args.out.join("casebook.json"), serde_json::to_string_pretty(&out)?)?;
     eprintln!("{}", serde_json::to_string(&rates)?);
     Ok(())
+}
+
+/// The named physics on the benchmarks' own splits ([`mpmwatch::accuracy`]), as a markdown
+/// section; the rows go into `json` too.
+fn benchmark_accuracy(data: &Path, json: &mut Vec<serde_json::Value>) -> String {
+    eprintln!("benchmark accuracy: silverbox, cascaded tanks");
+    let mut md = String::from(
+        "\n## Benchmark accuracy on the benchmarks' own splits\n\n| benchmark | model | test RMSE | NRMSE (RMSE / std of the test output) | split | published |\n| --- | --- | --- | --- | --- | --- |\n",
+    );
+    let rows = (|| -> anyhow::Result<Vec<mpmwatch::accuracy::AccuracyRow>> {
+        let p = data.join("silverbox/SNLS80mV.csv");
+        let (h, c) = read_plain(&p)?;
+        let mut rows = mpmwatch::accuracy::silverbox(&column(&h, &c, "V1", &p)?, &column(&h, &c, "V2", &p)?)?;
+        let p = data.join("cascaded_tanks/dataBenchmark.csv");
+        let (h, c) = read_plain(&p)?;
+        let col = |n| column(&h, &c, n, &p);
+        rows.extend(mpmwatch::accuracy::cascaded_tanks(
+            &col("uEst")?,
+            &col("yEst")?,
+            &col("uVal")?,
+            &col("yVal")?,
+        )?);
+        Ok(rows)
+    })();
+    match rows {
+        Ok(rows) => {
+            for r in rows {
+                md.push_str(&format!(
+                    "| {} | {} | {:.3} {} | {:.2} % | {} | {} |\n",
+                    r.benchmark, r.model, r.rmse, r.unit, r.nrmse_pct, r.split, r.published
+                ));
+                json.push(json!({"benchmark_accuracy": r}));
+            }
+        }
+        Err(e) => md.push_str(&format!("| – | error: {e:#} | – | – | – | – |\n")),
+    }
+    md
 }
 
 /// The held-out tail of one simulated case: its last 200 samples (at most the tail) of output

@@ -1,6 +1,7 @@
 //! Integration tests of the mpmwatch binary and its library half: the CLI verbs, reproduce, the casebook's real recordings and physical models, and the service run as a process (restart, soak, scale-out).
 //! One test binary per crate, each test file a module, so the dependencies link once.
 
+mod accuracy;
 mod cli;
 #[path = "../../../mpmwatch-core/tests/it/common.rs"]
 mod common;
