@@ -420,7 +420,14 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 })
                 .collect();
             let limits = limit_tests[cv].as_ref().is_some_and(|t| t.significant);
-            if flagged.is_empty() && !limits {
+            let greybox_path =
+                input.excitations.is_none() && input.physical.get(j).copied().flatten().is_none();
+            // Without dithers the MI of an input against the residual of a least-squares nominal
+            // misses much of what a fit shows (the residual is orthogonal to the regressors), so
+            // on the grey-box path an output nothing flagged is still explained, every input a
+            // candidate; only a finding that wins out of sample is kept (below).
+            let quiet = flagged.is_empty() && !limits;
+            if quiet && !greybox_path {
                 continue;
             }
             if flagged.is_empty() {
@@ -431,7 +438,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 flagged = (0..input.inputs.len()).collect();
             }
             let ctx = &ctxs[cv];
-            if input.excitations.is_none() && input.physical.get(j).copied().flatten().is_none() {
+            if greybox_path {
                 let (y, s0) = (input.outputs[j].values, input.simulated[j].values);
                 let d = greybox::Data { u: u_all.clone(), y, train: 0..n_train, nominal: Some(s0) };
                 let names = greybox::Names {
@@ -449,6 +456,9 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                     ts,
                     &names,
                 );
+                if quiet && e.finding.physics == Physics::Unexplained {
+                    continue;
+                }
                 if let Some(c) = e.corrected {
                     corrected[j] = c;
                 }

@@ -106,6 +106,8 @@ pub struct PhysicalRecord {
     pub u: Vec<f64>,
     /// Recorded output (plant plus measurement noise).
     pub y: Vec<f64>,
+    /// The plant's own output, noise-free: the simulation of an exact model (a no-change case).
+    pub plant: Vec<f64>,
     /// The nominal ARX model's simulation from `u` (least squares on the whole record).
     pub s: Vec<f64>,
     /// The drawn parameters, in words.
@@ -362,6 +364,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
         seed,
         u,
         y,
+        plant: x,
         s,
         description: format!(
             "{description}; noise AR(1) pole {pole:.2}, {:.0} % of the variance",

@@ -8,13 +8,18 @@ use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diag
 use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, run};
 
 pub(crate) fn diagnose_record(r: &PhysicalRecord) -> Diagnosis {
+    diagnose_against(r, &r.s)
+}
+
+/// `r` diagnosed against the simulation `s`.
+pub(crate) fn diagnose_against(r: &PhysicalRecord, s: &[f64]) -> Diagnosis {
     let time: Vec<f64> = (0..r.y.len()).map(|k| k as f64).collect();
     let input = DiagnoseInput {
         time: &time,
         inputs: vec![Signal { name: "u1", values: &r.u }],
         excitations: None,
         outputs: vec![Signal { name: "y1", values: &r.y }],
-        simulated: vec![Signal { name: "y1", values: &r.s }],
+        simulated: vec![Signal { name: "y1", values: s }],
         physical: Vec::new(),
     };
     diagnose(&input, &DiagnoseOptions::default()).expect("diagnosis")

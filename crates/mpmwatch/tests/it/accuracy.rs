@@ -36,7 +36,10 @@ fn silverbox_with_the_cubic_spring_on_the_arrow_head() {
     let cols = read_columns(&data_dir().join("silverbox/SNLS80mV.csv"), &["V1", "V2"]);
     let rows = mpmwatch::accuracy::silverbox(&cols[0], &cols[1]).unwrap();
     for r in &rows {
-        eprintln!("{} {:.3} {} {:.2} %", r.model, r.rmse, r.unit, r.nrmse_pct);
+        eprintln!(
+            "{} {:.3} {} {:.2} % (estimation {:.3})",
+            r.model, r.rmse, r.unit, r.nrmse_pct, r.estimation_rmse
+        );
     }
     assert!(
         rows[1].nrmse_pct <= 2.0 && rows[0].nrmse_pct > 10.0,
@@ -56,7 +59,10 @@ fn cascaded_tanks_with_the_overflow_on_the_validation_record() {
         read_columns(&data_dir().join("cascaded_tanks/dataBenchmark.csv"), &["uEst", "uVal", "yEst", "yVal"]);
     let rows = mpmwatch::accuracy::cascaded_tanks(&cols[0], &cols[2], &cols[1], &cols[3]).unwrap();
     for r in &rows {
-        eprintln!("{} {:.3} {} {:.2} %", r.model, r.rmse, r.unit, r.nrmse_pct);
+        eprintln!(
+            "{} {:.3} {} {:.2} % (estimation {:.3})",
+            r.model, r.rmse, r.unit, r.nrmse_pct, r.estimation_rmse
+        );
     }
     assert!(
         rows[1].rmse <= rows[0].rmse * 2.0 / 3.0,
