@@ -44,7 +44,7 @@ use std::collections::BTreeMap;
 pub use candidates::{ActsOn, Physics};
 pub use error::DiagnoseError;
 pub use fitness::fit_pct;
-pub use greybox::{FittedGreyBox, GreyBox, Structure};
+pub use greybox::{ElementCurve, FittedGreyBox, GreyBox, Structure};
 pub use nominal::{NominalArx, identify as identify_nominal};
 pub use physical::{LEVEL_QUANTILES, PhysicalModel};
 pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
@@ -124,6 +124,9 @@ pub struct Diagnosis {
     pub corrected: Vec<Vec<f64>>,
     /// The MI matrix on the training part (`None` when every residual was exactly zero).
     pub matrix: Option<MatrixResult>,
+    /// Per output, the named physics element's map when the grey-box step fitted one (a dead
+    /// zone's input–output map, a friction force against motion), for a figure.
+    pub curves: Vec<Option<ElementCurve>>,
 }
 
 fn check(time: &[f64], s: &Signal<'_>) -> Result<(), DiagnoseError> {
@@ -313,6 +316,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let mut channels = Vec::new();
     let mut findings = Vec::new();
     let mut corrected: Vec<Vec<f64>> = input.simulated.iter().map(|s| s.values.to_vec()).collect();
+    let mut curves: Vec<Option<ElementCurve>> = vec![None; input.simulated.len()];
     let u_all: Vec<&[f64]> = input.inputs.iter().map(|u| u.values).collect();
     let exc_all: Vec<&[f64]> = exc.iter().map(|e| e.values).collect();
     let u_driven: Vec<Vec<f64>> = match &input.excitations {
@@ -462,6 +466,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 if let Some(c) = e.corrected {
                     corrected[j] = c;
                 }
+                curves[j] = e.curve;
                 let mut finding = e.finding;
                 finding.fit_before_pct = fit_pct(y, s0);
                 finding.fit_after_pct = fit_pct(y, &corrected[j]);
@@ -519,7 +524,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         }),
         states,
     };
-    Ok(Diagnosis { report, corrected, matrix })
+    Ok(Diagnosis { report, corrected, matrix, curves })
 }
 
 /// Share of an input's variance that its excitations may leave unexplained before the loop

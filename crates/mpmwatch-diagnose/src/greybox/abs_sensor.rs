@@ -45,6 +45,14 @@ impl Element for AbsSensor {
     fn output(&self, p: &[f64], x: f64) -> f64 {
         x.abs() + p[0]
     }
+    fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
+        Some(self.output(p, v))
+    }
+    /// A true value of either sign, as far as the reading goes.
+    fn map_axes(&self, d: &Data<'_>, _i: usize, _input: &str, output: &str) -> (String, (f64, f64), String) {
+        let m = d.y_quantile(0.0).abs().max(d.y_quantile(1.0).abs());
+        (format!("true {output} (signed)"), (-m, m), format!("{output} as measured"))
+    }
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!(

@@ -32,6 +32,9 @@ impl Element for ClipSensor {
     fn invertible(&self, p: &[f64], y: f64) -> bool {
         y > p[0].min(p[1]) && y < p[0].max(p[1])
     }
+    fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
+        Some(self.output(p, v))
+    }
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         (

@@ -35,6 +35,9 @@ impl Element for DeadZone {
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         map_input(u, i, |x| x.iter().map(|&v| map(v, p[0], p[1])).collect())
     }
+    fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
+        Some(map(v, p[0], p[1]))
+    }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!(

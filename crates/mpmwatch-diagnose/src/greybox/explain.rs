@@ -35,6 +35,8 @@ pub struct Explanation {
     pub finding: Finding,
     /// The corrected simulation over the whole record (`None`: no correction).
     pub corrected: Option<Vec<f64>>,
+    /// The named element's map, for its figure (`None`: no element, or one without a map).
+    pub curve: Option<super::ElementCurve>,
 }
 
 /// Names of the signals, for the report.
@@ -123,6 +125,7 @@ pub fn explain(
             return Explanation {
                 finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried),
                 corrected: Some(sim),
+                curve: m.curve(&f, d, names.inputs[i], names.output),
             };
         }
     }
@@ -139,6 +142,7 @@ pub fn explain(
             return Explanation {
                 finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
                 corrected: Some(sim),
+                curve: None,
             };
         }
     }
@@ -157,6 +161,7 @@ pub fn explain(
     Explanation {
         finding: finding(names, i, Physics::Unexplained, ActsOn::Input, summary, BTreeMap::new(), tried),
         corrected: None,
+        curve: None,
     }
 }
 

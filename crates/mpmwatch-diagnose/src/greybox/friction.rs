@@ -35,6 +35,21 @@ impl Element for Coulomb {
     fn feedbacks(&self) -> usize {
         1
     }
+    fn map_at(&self, p: &[f64], gamma: &[f64], v: f64) -> Option<f64> {
+        let m = if self.on_change { v } else { v - p[0] };
+        Some(gamma[0] * if m == 0.0 { 0.0 } else { m.signum() })
+    }
+    /// Against the motion: the output's change per sample, or the output itself.
+    fn map_axes(&self, d: &Data<'_>, _i: usize, _input: &str, output: &str) -> (String, (f64, f64), String) {
+        let force = "friction force fed back (per sample)".to_string();
+        if self.on_change {
+            let y = &d.y[d.train.clone()];
+            let m = y.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0f64, f64::max);
+            (format!("change of {output} per sample"), (-m, m), force)
+        } else {
+            (output.to_string(), (d.y_quantile(0.0), d.y_quantile(1.0)), force)
+        }
+    }
     fn describe(&self, _p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let what = if self.on_change { "the change of" } else { "the sign of" };
         (format!("a constant force against {what} {output} (Coulomb friction)"), BTreeMap::new())

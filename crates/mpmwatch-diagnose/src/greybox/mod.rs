@@ -109,6 +109,65 @@ pub trait Element: Sync {
     }
     /// A sentence and the parameters, for the report.
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>);
+    /// The element's static map at `v`, for its figure: what the dynamics see of an input `v`
+    /// (input elements), the reading of a true value `v` (output elements), the force for a
+    /// motion `v` weighted by the fitted feedback coefficients `gamma` (feedback elements).
+    /// `None`: no single-valued map of its own (backlash is a loop; a polynomial's map lives in
+    /// the numerator coefficients).
+    fn map_at(&self, _p: &[f64], _gamma: &[f64], _v: f64) -> Option<f64> {
+        None
+    }
+    /// What [`Element::map_at`] maps: the argument's name and range, and the value's name.
+    fn map_axes(&self, d: &Data<'_>, i: usize, input: &str, output: &str) -> (String, (f64, f64), String) {
+        match self.acts_on() {
+            ActsOn::Input => (
+                input.to_string(),
+                (d.u_quantile(i, 0.0), d.u_quantile(i, 1.0)),
+                format!("what the dynamics see of {input}"),
+            ),
+            ActsOn::Output => (
+                format!("true {output}"),
+                (d.y_quantile(0.0), d.y_quantile(1.0)),
+                format!("{output} as measured"),
+            ),
+        }
+    }
+}
+
+/// A fitted element drawn as what it is: its static map over the range the record visits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElementCurve {
+    /// The element's class.
+    pub physics: Physics,
+    /// Name of the map's argument.
+    pub x_label: String,
+    /// Name of its value.
+    pub y_label: String,
+    /// The map, 201 points over the range.
+    pub points: Vec<(f64, f64)>,
+    /// What the nominal assumes in its place: the identity for a map on a signal, no force
+    /// for a feedback element.
+    pub baseline: Vec<(f64, f64)>,
+}
+
+impl Model<'_> {
+    /// The fitted element's map ([`Element::map_at`]) over its range, `None` when it has none.
+    pub fn curve(&self, f: &Fitted, d: &Data<'_>, input: &str, output: &str) -> Option<ElementCurve> {
+        let sig = self.element.signals(&f.p, &d.u, self.input).len();
+        let g0 = self.orders.na + sig * self.orders.nb;
+        let gamma = &f.theta[g0..g0 + self.element.feedbacks()];
+        let (x_label, (lo, hi), y_label) = self.element.map_axes(d, self.input, input, output);
+        let pad = 0.1 * (hi - lo).max(1e-12);
+        let points = (0..=200)
+            .map(|k| {
+                let v = lo - pad + (hi - lo + 2.0 * pad) * k as f64 / 200.0;
+                self.element.map_at(&f.p, gamma, v).map(|m| (v, m))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        let fed_back = self.element.feedbacks() > 0;
+        let baseline = points.iter().map(|&(v, _)| (v, if fed_back { 0.0 } else { v })).collect();
+        Some(ElementCurve { physics: self.element.physics(), x_label, y_label, points, baseline })
+    }
 }
 
 /// The inputs with input `i` replaced by `map` of it: what an element on one input makes of
@@ -475,6 +534,15 @@ mod tests {
         let f = fit(&m, &d, &rows).unwrap();
         assert!((f.p[1].abs() - 0.3).abs() < 1e-3, "{f:?}");
         assert!((f.theta[0] - 0.8).abs() < 1e-3 && (f.theta[1] - 0.5).abs() < 1e-3, "{f:?}");
+        // Its figure is the dead zone's own map over the input's range: flat inside ±0.3, the
+        // excess beyond (the closed form, to the fit's 1e-3).
+        let c = m.curve(&f, &d, "u", "y").unwrap();
+        assert_eq!(c.points.len(), 201);
+        for &(v, w) in &c.points {
+            let truth = v.signum() * (v.abs() - 0.3).max(0.0);
+            assert!((w - truth).abs() < 2e-3, "{v}: {w} against {truth}");
+        }
+        assert!(c.baseline.iter().all(|&(v, b)| v == b));
     }
 
     /// A Duffing-type recursion with a cubic feedback term is recovered exactly from noise-free
@@ -496,5 +564,13 @@ mod tests {
         let f = fit(&m, &d, &rows).unwrap();
         let s = m.simulate(&f, &d.u, &y).unwrap();
         assert!(fit_pct(&y[10..], &s[10..]) > 99.9, "{f:?}");
+        // Its figure is the fed-back force −0.02·x³ (the level fitted at 0 to 1e-3 of the
+        // output's range, the coefficient exact on noise-free data).
+        let c = m.curve(&f, &d, "u", "y").unwrap();
+        let span = c.points.last().unwrap().0 - c.points[0].0;
+        for &(x, g) in &c.points {
+            assert!((g + 0.02 * x.powi(3)).abs() < 1e-3 * 0.02 * span.powi(3), "{x}: {g}");
+        }
+        assert!(c.baseline.iter().all(|&(_, b)| b == 0.0));
     }
 }

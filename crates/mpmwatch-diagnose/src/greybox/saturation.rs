@@ -32,6 +32,9 @@ impl Element for InputSaturation {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         map_input(u, i, |x| x.iter().map(|v| v.clamp(lo, hi)).collect())
     }
+    fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
+        Some(v.clamp(p[0].min(p[1]), p[0].max(p[1])))
+    }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         (

@@ -25,6 +25,16 @@ impl Element for CubicStiffness {
     fn feedbacks(&self) -> usize {
         1
     }
+    fn map_at(&self, p: &[f64], gamma: &[f64], v: f64) -> Option<f64> {
+        Some(gamma[0] * (v - p[0]).powi(3))
+    }
+    fn map_axes(&self, d: &Data<'_>, _i: usize, _input: &str, output: &str) -> (String, (f64, f64), String) {
+        (
+            output.to_string(),
+            (d.y_quantile(0.0), d.y_quantile(1.0)),
+            "spring force fed back (per sample)".into(),
+        )
+    }
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!("a force in the cube of {output}'s deviation from {:.3} (a stiffening spring)", p[0]),

@@ -95,6 +95,11 @@ fn study() {
                 r.description,
                 best
             );
+            if std::env::var_os("VERBOSE").is_some() {
+                for f in &d.report.findings {
+                    eprintln!("    {}: {} {:?}", f.physics.name(), f.summary, f.parameters);
+                }
+            }
         }
         eprintln!("== {}: {case_right}/{}", case.name(), b - a);
     }

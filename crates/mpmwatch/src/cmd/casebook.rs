@@ -358,6 +358,14 @@ fn real_case(
         &dg.corrected[0],
         dg.report.holdout.start_index,
     )?;
+    if let Some(Some(c)) = dg.curves.first() {
+        crate::cmd::diagnose::element_figure(
+            fig,
+            &format!("real_{name}_element"),
+            &format!("{name}: the fitted {}", c.physics.name()),
+            c,
+        )?;
+    }
     let f = dg.report.findings.first();
     let (fb, fa) = (dg.report.holdout.fit_before_pct["y"], dg.report.holdout.fit_after_pct["y"]);
     let physics = f.map_or("none".to_string(), |f| f.physics.name().to_string());

@@ -219,8 +219,32 @@ pub fn write_outputs(
                 &dg.corrected[j],
                 dg.report.holdout.start_index,
             )?;
+            if let Some(Some(c)) = dg.curves.get(j) {
+                element_figure(
+                    dir,
+                    &format!("diagnose_{n}_element"),
+                    &format!("{n}: the fitted {}", c.physics.name()),
+                    c,
+                )?;
+            }
         }
     }
+    Ok(())
+}
+
+/// The named physics element drawn as what it is (`{name}.png`): its fitted map over the range
+/// the record visits, beside what the nominal assumes in its place (dashed).
+pub fn element_figure(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    c: &mpmwatch_diagnose::ElementCurve,
+) -> anyhow::Result<()> {
+    let series = [
+        XySeries::line("nominal (without it)", c.baseline.clone(), true, (120, 120, 120), 2),
+        XySeries::line(format!("fitted {}", c.physics.name()), c.points.clone(), false, (31, 119, 180), 3),
+    ];
+    write_xy_chart(dir, name, title, &c.x_label, &c.y_label, &series)?;
     Ok(())
 }
 

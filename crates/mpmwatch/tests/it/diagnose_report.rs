@@ -164,3 +164,37 @@ fn bad_input_names_the_culprit() {
         other => panic!("{other:?}"),
     }
 }
+
+/// An open-loop record from the CSV verb (no `--excitations`): an actuator dead zone
+/// (`mpmwatch_sim::physical_cases`, development seed 1) against the user's ARX nominal. The
+/// dead zone is named, and `--figures` draws the fitted element beside the output figure.
+#[test]
+fn open_loop_dead_zone_is_named_and_its_element_drawn() {
+    use mpmwatch_sim::physical_cases::{PhysicalCase, run as run_case};
+    let r = run_case(PhysicalCase::ActuatorDeadZone, 3000, 1).unwrap();
+    let dir = tmp("element");
+    let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
+    write_csv(&recp, &["u1", "y1"], &[&r.u, &r.y]);
+    write_csv(&simp, &["y1"], &[&r.s]);
+    let figs = dir.join("figures");
+    let out = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
+        .args(["diagnose", "--recorded"])
+        .arg(&recp)
+        .arg("--simulated")
+        .arg(&simp)
+        .args(["--inputs", "u1", "--outputs", "y1", "--report"])
+        .arg(dir.join("r.json"))
+        .arg("--corrected")
+        .arg(dir.join("c.csv"))
+        .arg("--figures")
+        .arg(&figs)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("dead_zone"), "{stdout}");
+    for f in ["diagnose_y1.png", "diagnose_y1_element.png"] {
+        let len = std::fs::metadata(figs.join(f)).map_or(0, |m| m.len());
+        assert!(len > 1000, "{f}: {len} bytes");
+    }
+}
