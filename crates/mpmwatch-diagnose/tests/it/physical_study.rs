@@ -96,6 +96,16 @@ fn study() {
                 best
             );
             if std::env::var_os("VERBOSE").is_some() {
+                let cut = d.report.holdout.start_index;
+                let range =
+                    |x: &[f64]| x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+                eprintln!(
+                    "    u training {:?} held-out {:?}; y training {:?} held-out {:?}",
+                    range(&r.u[..cut]),
+                    range(&r.u[cut..]),
+                    range(&r.y[..cut]),
+                    range(&r.y[cut..])
+                );
                 for f in &d.report.findings {
                     eprintln!("    {}: {} {:?}", f.physics.name(), f.summary, f.parameters);
                 }
