@@ -120,15 +120,35 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
 pub(crate) fn ross(levels: &Levels, y: &[f64], k: usize) -> f64 {
     // Sorting the (value, label) pairs themselves compares in place, where sorting indices
     // would fetch both values from elsewhere at every comparison.
-    let mut pairs: Vec<(f64, u16)> = y.iter().copied().zip(levels.labels.iter().copied()).collect();
-    pairs.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    let (y_sorted, labels): (Vec<f64>, Vec<u16>) = pairs.into_iter().unzip();
+    // Each value is mapped once to the integer whose order is `f64::total_cmp`'s, so the sort
+    // compares integers instead of re-deriving that key at every comparison.
+    let mut pairs: Vec<(i64, u16)> =
+        y.iter().map(|&v| total_order(v.to_bits() as i64)).zip(levels.labels.iter().copied()).collect();
+    pairs.sort_unstable_by_key(|p| p.0);
+    let (y_sorted, labels): (Vec<f64>, Vec<u16>) =
+        pairs.into_iter().map(|(k, l)| (f64::from_bits(total_order(k) as u64), l)).unzip();
     ross_sorted(&y_sorted, &labels, levels.count(), k)
+}
+
+/// The bits of an `f64` as an integer ordered as `f64::total_cmp` orders the floats (the
+/// magnitude bits of negatives flipped, as `total_cmp` does); its own inverse.
+fn total_order(bits: i64) -> i64 {
+    bits ^ (((bits >> 63) as u64) >> 1) as i64
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sort_key_orders_as_total_cmp_and_inverts() {
+        let v = [-f64::INFINITY, -3.5, -1e-300, -0.0, 0.0, 1e-300, 2.0, f64::INFINITY];
+        let k: Vec<i64> = v.iter().map(|x| total_order(x.to_bits() as i64)).collect();
+        assert!(k.windows(2).all(|w| w[0] < w[1]), "{k:?}");
+        for (x, &k) in v.iter().zip(&k) {
+            assert_eq!(f64::from_bits(total_order(k) as u64).to_bits(), x.to_bits());
+        }
+    }
 
     #[test]
     fn levels_are_found_and_capped() {
