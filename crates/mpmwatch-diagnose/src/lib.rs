@@ -672,7 +672,7 @@ fn decide(
         }
         tried.push(Tried {
             physics: ph,
-            score_vs_null: s.score - null_score,
+            score_vs_null: Some(s.score - null_score),
             validation_gain_pct: val_fit(y, ctx, r, s, &val) - null_fit,
         });
     }

@@ -105,8 +105,11 @@ pub struct Finding {
 pub struct Tried {
     /// The class.
     pub physics: Physics,
-    /// Its best penalised score minus the null hypothesis' (negative: better than no correction).
-    pub score_vs_null: f64,
+    /// Its best penalised score minus the null hypothesis' (negative: better than no
+    /// correction), on the path that scores residual models (closed loop, physical models);
+    /// absent on the grey-box path, which measures only the validation gain.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub score_vs_null: Option<f64>,
     /// Validation FIT% gain of the residual model over no correction, points.
     pub validation_gain_pct: f64,
 }

@@ -101,7 +101,7 @@ pub fn explain(
             Some(t) if t.validation_gain_pct >= v - nominal_cv => {}
             Some(t) => t.validation_gain_pct = v - nominal_cv,
             None => {
-                tried.push(Tried { physics: ph, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv })
+                tried.push(Tried { physics: ph, score_vs_null: None, validation_gain_pct: v - nominal_cv })
             }
         }
     }
@@ -138,7 +138,7 @@ pub fn explain(
         {
             let i = flagged.first().copied().unwrap_or(0);
             let (physics, summary, parameters) = linear_change(nominal, &f, orders, i, ts, names);
-            tried.push(Tried { physics, score_vs_null: 0.0, validation_gain_pct: v - nominal_cv });
+            tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v - nominal_cv });
             return Explanation {
                 finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
                 corrected: Some(sim),

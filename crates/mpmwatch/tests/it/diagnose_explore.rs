@@ -75,7 +75,14 @@ fn explore() {
                 .tried
                 .iter()
                 .take(5)
-                .map(|t| format!("{} {:.1}/{:.2}", t.physics.name(), t.score_vs_null, t.validation_gain_pct))
+                .map(|t| {
+                    format!(
+                        "{} {:.1}/{:.2}",
+                        t.physics.name(),
+                        t.score_vs_null.unwrap_or(f64::NAN),
+                        t.validation_gain_pct
+                    )
+                })
                 .collect();
             eprintln!("    tried {:?}", tr);
         }
@@ -101,7 +108,7 @@ fn detail() {
                 eprintln!(
                     "    {:<18} {:>9.1} {:>7.2}",
                     t.physics.name(),
-                    t.score_vs_null,
+                    t.score_vs_null.unwrap_or(f64::NAN),
                     t.validation_gain_pct
                 );
             }
