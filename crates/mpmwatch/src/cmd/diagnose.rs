@@ -176,7 +176,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if dg.report.findings.is_empty() {
-        println!("no mismatch found (MI matrix all below its critical values)");
+        if args.excitations.is_empty() {
+            println!(
+                "no mismatch found (no input's MI with the residual above its critical value, and no \
+                 hypothesis improved the cross-validated FIT by the margin)"
+            );
+        } else {
+            println!("no mismatch found (MI matrix all below its critical values)");
+        }
     }
     for (k, v) in &dg.report.holdout.fit_before_pct {
         let after = dg.report.holdout.fit_after_pct[k];
