@@ -97,6 +97,10 @@ pub struct DiagnoseOptions {
     pub warmup: usize,
     /// Closed loop: how hypotheses are scored (default: prediction error, [`Scoring`]).
     pub scoring: Scoring,
+    /// Closed loop: explain the outputs the dithers' MI flags with the grey-box structures
+    /// (simulation error from the recorded inputs) instead of residual corrections. Off by
+    /// default; an experiment (docs/diagnose.md).
+    pub greybox_closed_loop: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -110,6 +114,7 @@ impl Default for DiagnoseOptions {
             min_gain_pct: 0.5,
             warmup: 20,
             scoring: Scoring::default(),
+            greybox_closed_loop: false,
         }
     }
 }
@@ -424,14 +429,15 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 })
                 .collect();
             let limits = limit_tests[cv].as_ref().is_some_and(|t| t.significant);
+            let open_loop = input.excitations.is_none();
             let greybox_path =
-                input.excitations.is_none() && input.physical.get(j).copied().flatten().is_none();
+                (open_loop || opts.greybox_closed_loop) && input.physical.get(j).copied().flatten().is_none();
             // Without dithers the MI of an input against the residual of a least-squares nominal
             // misses much of what a fit shows (the residual is orthogonal to the regressors), so
             // on the grey-box path an output nothing flagged is still explained, every input a
             // candidate; only a finding that wins out of sample is kept (below).
             let quiet = flagged.is_empty() && !limits;
-            if quiet && !greybox_path {
+            if quiet && !(greybox_path && open_loop) {
                 continue;
             }
             if flagged.is_empty() {

@@ -1,0 +1,65 @@
+//! The casebook's concealed closed-loop cases (`mpmwatch_sim::scenarios::casebook_specs`) with the
+//! grey-box structures explaining the outputs the dithers flag (`GREYBOX=1`) or the residual
+//! corrections (default). Ignored; `SEED=100 GREYBOX=1 cargo test -p mpmwatch-diagnose --test it
+//! closed_loop_study -- --ignored --nocapture` prints one line per case and the casebook's rates.
+
+use mpmwatch_diagnose::{DiagnoseOptions, Physics, diagnose_numbered};
+use mpmwatch_sim::scenarios::{casebook_specs, run};
+
+#[test]
+#[ignore]
+fn closed_loop_study() {
+    let seed: u64 = std::env::var("SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(100);
+    let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
+    let greybox = std::env::var_os("GREYBOX").is_some();
+    let only = std::env::var("CASE").ok();
+    let opts = DiagnoseOptions { greybox_closed_loop: greybox, ..Default::default() };
+    let (mut named, mut chan, mut total, mut alarms, mut nulls, mut fell) = (0, 0, 0, 0, 0, 0);
+    for spec in casebook_specs(n, seed) {
+        if only.as_ref().is_some_and(|o| !spec.name.contains(o.as_str())) {
+            continue;
+        }
+        let rec = run(&spec).unwrap();
+        let d = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &opts).unwrap();
+        let (ci, cj) = spec.channel;
+        let (tin, tout) = (format!("u{}", ci + 1), format!("y{}", cj + 1));
+        let f = d
+            .report
+            .findings
+            .iter()
+            .find(|f| f.physics != Physics::Unexplained)
+            .or(d.report.findings.first());
+        let right_channel = f.is_some_and(|f| f.input == tin && f.output == tout);
+        let right = f.is_some_and(|f| f.physics.name() == spec.effect.physics()) && right_channel;
+        let (fb, fa) = (d.report.holdout.fit_before_pct[&tout], d.report.holdout.fit_after_pct[&tout]);
+        if spec.effect.is_mismatch() {
+            total += 1;
+            named += usize::from(right);
+            chan += usize::from(right_channel);
+        } else {
+            nulls += 1;
+            alarms += usize::from(!d.report.findings.is_empty());
+        }
+        let reported = f.is_some_and(|f| f.physics != Physics::Unexplained);
+        fell += usize::from(reported && fa < fb);
+        eprintln!(
+            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1}",
+            spec.name,
+            spec.effect.physics(),
+            f.map_or("none", |f| f.physics.name()),
+            f.map_or("none".into(), |f| format!("{}→{}", f.input, f.output)),
+            if !spec.effect.is_mismatch() {
+                if d.report.findings.is_empty() { "ok" } else { "NO" }
+            } else if right {
+                "ok"
+            } else {
+                "NO"
+            },
+            fb,
+            fa
+        );
+    }
+    eprintln!(
+        "greybox {greybox} seed {seed}: physics {named}/{total}, channel {chan}/{total}, null cases with findings {alarms}/{nulls}, reported findings whose held-out FIT fell {fell}"
+    );
+}
