@@ -441,7 +441,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
                 continue;
             }
             if flagged.is_empty() {
-                // The state-limit test says the residual depends on the inputs, not that a limit
+                // Nothing flagged on the grey-box path: every input is a candidate. Or the
+                // state-limit test says the residual depends on the inputs, not that a limit
                 // is what it is: a wrong gain or time constant correlates with some limit's
                 // correction too. So every input competes with the limits, not just the limits
                 // with no correction.
@@ -509,7 +510,8 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
     let report = DiagnosisReport {
         mismatch: matrix.as_ref().is_some_and(|m| m.mismatch)
             || projection.iter().any(|p| p.significant)
-            || states.iter().any(|s| s.significant),
+            || states.iter().any(|s| s.significant)
+            || findings.iter().any(|f| f.physics != Physics::Unexplained),
         channels,
         findings,
         holdout: Holdout { start_index: n_train, fit_before_pct: before, fit_after_pct: after },

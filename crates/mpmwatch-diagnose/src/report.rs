@@ -9,11 +9,13 @@ use super::candidates::{ActsOn, Physics};
 /// The whole report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosisReport {
-    /// True when the MI matrix finds any significant element.
+    /// True when the MI matrix, the projection or the state-limit test finds a significant
+    /// element, or (open-loop records) a named physics improves the fit out of sample.
     pub mismatch: bool,
     /// One entry per tested input→output channel.
     pub channels: Vec<ChannelReport>,
-    /// What physics was left out, per output with a flagged channel.
+    /// What physics was left out, per output with a flagged channel (on an open-loop record,
+    /// also per output whose grey-box explanation won out of sample).
     pub findings: Vec<Finding>,
     /// FIT% on the held-out tail, before and after the correction.
     pub holdout: Holdout,

@@ -270,7 +270,14 @@ impl Model<'_> {
             }
             x[t] = v;
         }
-        Some(x.iter().map(|&v| self.element.output(&f.p, v)).collect())
+        // The first rows are the recorded start, not predictions: they are returned as
+        // recorded (an output map applied to them would count an |x| sensor's offset twice).
+        Some(
+            x.iter()
+                .enumerate()
+                .map(|(t, &v)| if t < first { y[t] } else { self.element.output(&f.p, v) })
+                .collect(),
+        )
     }
 
     /// The equation-error least-squares fit of the coefficients, the element's parameters
@@ -535,7 +542,8 @@ mod tests {
         assert!((f.p[1].abs() - 0.3).abs() < 1e-3, "{f:?}");
         assert!((f.theta[0] - 0.8).abs() < 1e-3 && (f.theta[1] - 0.5).abs() < 1e-3, "{f:?}");
         // Its figure is the dead zone's own map over the input's range: flat inside ±0.3, the
-        // excess beyond (the closed form, to the fit's 1e-3).
+        // excess beyond (the closed form; the width's 1e-3 and the gain's carried into a value
+        // of the map).
         let c = m.curve(&f, &d, "u", "y").unwrap();
         assert_eq!(c.points.len(), 201);
         for &(v, w) in &c.points {

@@ -88,8 +88,12 @@ impl GreyBox {
 
 impl FittedGreyBox {
     /// Simulation over a record: `u` per input, `y` whose first samples start the simulation
-    /// (only as many as the orders need). `None` when it diverges.
+    /// (only as many as the orders need). `None` when it diverges, or when the inputs are not
+    /// the fitted model's (their count) or not as long as `y`.
     pub fn simulate(&self, u: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
+        if u.len() != self.orders.nk.len() || u.iter().any(|x| x.len() != y.len()) {
+            return None;
+        }
         let model = Model { element: self.element.as_ref(), input: 0, orders: self.orders.clone() };
         model.simulate(&self.fitted, u, y)
     }

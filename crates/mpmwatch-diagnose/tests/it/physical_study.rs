@@ -1,7 +1,8 @@
 //! The open-loop physical cases (`mpmwatch_sim::physical_cases`) diagnosed as a user would:
 //! the nominal is an ARX model fitted by least squares on the record, the input is its own
-//! excitation. The study (ignored; `SEEDS=a..b N=3000 cargo test -p
-//! mpmwatch-diagnose study -- --ignored --nocapture`) prints one line per case and the rates.
+//! excitation. The study (ignored; `SEEDS=a..b N=3000 cargo test -p mpmwatch-diagnose --test it
+//! physical_study::study -- --ignored --exact --nocapture`; `CASE=name` for one class, `VERBOSE=1`
+//! for the findings and ranges) prints one line per case and the rates.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};

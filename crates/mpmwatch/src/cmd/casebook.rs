@@ -166,6 +166,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         md.push_str(".\n\n");
     }
     let mut real = Vec::new();
+    let mut accuracy = Vec::new();
     if !args.simulated_only {
         md.push_str("## Real recordings\n\n| recording | simulation | channel | physics named | parameters | held-out FIT before → after | figure |\n| --- | --- | --- | --- | --- | --- | --- |\n");
         for (name, f) in
@@ -183,11 +184,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             }
         }
-        md.push_str(&benchmark_accuracy(&args.data, &mut real));
+        md.push_str(&benchmark_accuracy(&args.data, &mut accuracy));
         md.push_str("\nData: Silverbox and cascaded tanks from the nonlinear system-identification benchmarks (Wigren & Schoukens; Schoukens, Mattsson, Wigren & Noël 2016, CC BY-SA 4.0), coupled electric drives (Wigren & Schoukens, Uppsala University 2017), TCLab (BSD-3).\n");
     }
     std::fs::write(args.out.join("casebook.md"), md)?;
-    let out = json!({"rates": rates, "simulated": rows, "real": real, "seed": args.seed, "n": args.n});
+    let out = json!({"rates": rates, "simulated": rows, "real": real, "benchmark_accuracy": accuracy,
+                     "seed": args.seed, "n": args.n});
     std::fs::write(args.out.join("casebook.json"), serde_json::to_string_pretty(&out)?)?;
     eprintln!("{}", serde_json::to_string(&rates)?);
     Ok(())
@@ -195,7 +197,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// The named physics on the benchmarks' own splits ([`mpmwatch::accuracy`]), as a markdown
 /// section; the rows go into `json` too.
-fn benchmark_accuracy(data: &Path, json: &mut Vec<serde_json::Value>) -> String {
+fn benchmark_accuracy(data: &Path, json: &mut Vec<mpmwatch::accuracy::AccuracyRow>) -> String {
     eprintln!("benchmark accuracy: silverbox, cascaded tanks");
     let mut md = String::from(
         "\n## Benchmark accuracy on the benchmarks' own splits\n\n| benchmark | model | test RMSE | NRMSE (RMSE / std of the test output) | estimation RMSE (in sample) | split | published |\n| --- | --- | --- | --- | --- | --- | --- |\n",
@@ -230,7 +232,7 @@ fn benchmark_accuracy(data: &Path, json: &mut Vec<serde_json::Value>) -> String 
                     r.split,
                     r.published
                 ));
-                json.push(json!({"benchmark_accuracy": r}));
+                json.push(r);
             }
         }
         Err(e) => md.push_str(&format!("| – | error: {e:#} | – | – | – | – | – |\n")),

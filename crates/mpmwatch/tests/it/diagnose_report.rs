@@ -192,7 +192,10 @@ fn open_loop_dead_zone_is_named_and_its_element_drawn() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(stdout.contains("dead_zone"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    assert_eq!(v["findings"][0]["physics"], "dead_zone", "{stdout}");
+    assert_eq!(v["mismatch"], true);
     for f in ["diagnose_y1.png", "diagnose_y1_element.png"] {
         let len = std::fs::metadata(figs.join(f)).map_or(0, |m| m.len());
         assert!(len > 1000, "{f}: {len} bytes");
