@@ -93,9 +93,9 @@ pub fn silverbox(v1: &[f64], v2: &[f64]) -> Result<Vec<AccuracyRow>, DiagnoseErr
 /// physics `diagnose` names, the upper tank's overflow, plus the sensor's top at 10 V, fitted on
 /// the whole estimation record; both simulated on the validation record from its first measured
 /// level, scored over all of it in volts. The corrected model's upper tank starts the validation
-/// at the level fitted for the estimation record's start (the benchmark states that both
-/// experiments start from the same, unknown, state); the nominal's starts at the level that
-/// holds the measured one steady.
+/// at the level fitted for the estimation record's start (an assumption: both experiments start
+/// from about the same state, their first levels 5.2 and 5.0 V); the nominal's starts at the
+/// level that holds the measured one steady.
 pub fn cascaded_tanks(
     ue: &[f64],
     ye: &[f64],
