@@ -300,3 +300,26 @@ fn linear_change(
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mpmwatch_core::model::Arx;
+
+    fn nominal(a: Vec<f64>, b: Vec<Vec<f64>>) -> NominalArx {
+        let delays = vec![0; b.len()];
+        NominalArx { arx: Arx::new(a, b, delays).unwrap(), fit_pct: 100.0 }
+    }
+
+    /// The nominal's orders read off its coefficients: poles from `A`, the dead time as the
+    /// leading numerator coefficients below a thousandth of the largest, taps from the first
+    /// to the last significant one (at most 3), the longest over the inputs.
+    #[test]
+    fn nominal_orders_are_read_off_the_coefficients() {
+        let n = nominal(vec![1.0, -1.5, 0.6], vec![vec![0.0, 1e-6, 0.4, 0.2], vec![0.3, 0.0, 0.0, 0.0]]);
+        assert_eq!(nominal_orders(&n, 2), Orders { na: 2, nb: 2, nk: vec![2, 0] });
+        // More than 3 poles or taps are capped; an all-zero numerator gives a tap at lag 0.
+        let n = nominal(vec![1.0, -0.5, 0.1, 0.01, 0.001], vec![vec![0.1, 0.2, 0.3, 0.4, 0.5], vec![0.0; 5]]);
+        assert_eq!(nominal_orders(&n, 2), Orders { na: 3, nb: 3, nk: vec![0, 0] });
+    }
+}
