@@ -1,33 +1,7 @@
 //! Benchmark-grade accuracy on the benchmarks' own splits (the data are read from the shared
 //! folder; a missing file fails the test with its name).
 
-use std::path::PathBuf;
-
-fn data_dir() -> PathBuf {
-    std::env::var_os("MPMWATCH_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
-}
-
-fn read_columns(path: &PathBuf, names: &[&str]) -> Vec<Vec<f64>> {
-    assert!(path.exists(), "{} not found: set MPMWATCH_DATA to the shared data folder", path.display());
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> =
-        lines.next().unwrap().split(',').map(|s| s.trim().trim_matches('"').to_string()).collect();
-    let idx: Vec<usize> =
-        names.iter().map(|n| header.iter().position(|h| h == n).expect("column in header")).collect();
-    let mut cols = vec![Vec::new(); names.len()];
-    for l in lines.filter(|l| !l.trim().is_empty()) {
-        let cells: Vec<&str> = l.split(',').collect();
-        for (c, &k) in idx.iter().enumerate() {
-            if let Some(v) = cells.get(k).and_then(|s| s.trim().parse::<f64>().ok()) {
-                cols[c].push(v);
-            }
-        }
-    }
-    cols
-}
+use super::shared_data::{data_dir, read_columns};
 
 /// The issue's goal: ≤ 2 % NRMSE on the arrow head with the cubic spring; the linear model of the
 /// same orders must stay far from it (above 10 %), or the benchmark would not test the physics.

@@ -7,39 +7,15 @@
 //! or, without that variable, from `../shared/data` next to the crate. When the file is absent
 //! the test fails with a message naming it (the data folder's own rule: never pass silently).
 
-use std::path::PathBuf;
-
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::model::{Arx, ArxOrders};
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose};
 
-fn data_dir() -> PathBuf {
-    std::env::var_os("MPMWATCH_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
-}
-
-fn read_columns(path: &PathBuf, names: &[&str]) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> =
-        lines.next().unwrap().split(',').map(|s| s.trim().trim_matches('"').to_string()).collect();
-    let idx: Vec<usize> =
-        names.iter().map(|n| header.iter().position(|h| h == n).expect("column in header")).collect();
-    let mut cols = vec![Vec::new(); names.len()];
-    for l in lines.filter(|l| !l.trim().is_empty()) {
-        let cells: Vec<&str> = l.split(',').collect();
-        for (c, &k) in idx.iter().enumerate() {
-            cols[c].push(cells[k].trim().parse::<f64>().unwrap());
-        }
-    }
-    cols
-}
+use super::shared_data::{data_dir, read_columns};
 
 #[test]
 fn silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises() {
     let path = data_dir().join("silverbox/SNLS80mV.csv");
-    assert!(path.exists(), "{} not found: set MPMWATCH_DATA to the shared data folder", path.display());
     let cols = read_columns(&path, &["V1", "V2"]);
     let (u, y) = (&cols[0][..40_000], &cols[1][..40_000]);
     // ARX(2,3) with a constant, least squares on samples 2 000..10 000 (the low amplitudes).
@@ -72,7 +48,6 @@ fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
     use mpmwatch::tanks::{benchmark_options, benchmark_record};
     use mpmwatch_diagnose::PhysicalModel;
     let path = data_dir().join("cascaded_tanks/dataBenchmark.csv");
-    assert!(path.exists(), "{} not found: set MPMWATCH_DATA to the shared data folder", path.display());
     let cols = read_columns(&path, &["uEst", "uVal", "yEst", "yVal"]);
     let (ue, uv, ye, yv) = (&cols[0], &cols[1], &cols[2], &cols[3]);
     let record = benchmark_record(ue, ye, uv, yv);

@@ -18,4 +18,5 @@ mod service_scaleout;
 mod service_soak;
 #[path = "../../../mpmwatch-service/tests/it/service_support.rs"]
 mod service_support;
+mod shared_data;
 mod sim_cli;
