@@ -112,7 +112,9 @@ pub struct Tried {
     /// absent on the grey-box path, which measures only the validation gain.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub score_vs_null: Option<f64>,
-    /// Validation FIT% gain of the residual model over no correction, points.
+    /// FIT% gain over no correction on held-back training data, points: on the path that
+    /// scores residual models, the mean over the three blocks of the training part, each
+    /// predicted by a fit on the other two.
     pub validation_gain_pct: f64,
 }
 
@@ -146,4 +148,8 @@ pub struct Settings {
     /// open-loop record, scored by the plain validation error).
     #[serde(default)]
     pub scoring: String,
+    /// The honesty gate's margin: smallest FIT gain on held-back training data, in points, for a
+    /// finding to be reported.
+    #[serde(default)]
+    pub min_gain_pct: f64,
 }

@@ -92,14 +92,19 @@ enum Verb {
     ///
     /// Residuals are recorded minus simulated outputs. (1) Locate: the MI matrix of the
     /// excitations (--excitations, or the inputs themselves for open-loop records) against the
-    /// residuals, on the training part, says which input→output channels are wrong. (2) Name:
-    /// on each flagged channel every candidate physics is fitted — gain, time_constant,
-    /// dead_time, missing_coupling, dead_zone, saturation, quadratic, cubic, bilinear, backlash,
-    /// coulomb_friction, abs_sensor — by least squares (instrumented by the dither-driven part of
-    /// the inputs in a closed loop), FROLS for lagged products and grids for thresholds, and
-    /// scored on held-back training data in simulation mode with a BIC penalty; `unexplained`
-    /// when none beats no correction. (3) Fit: the corrected simulation is the simulation plus the
-    /// fitted correction, driven by the recorded inputs only. (4) Prove: FIT% on the last
+    /// residuals, on the training part, says which input→output channels are wrong. (2) Name.
+    /// Open loop (no --excitations): each output is explained by grey-box structures, the
+    /// nominal's linear dynamics re-estimated together with one physics element (dead zone,
+    /// saturation, polynomial, backlash on an input; |x| sensor or clip on the output; Coulomb
+    /// friction or a cubic spring fed back), fitted by simulation error; a linear re-fit always
+    /// competes. Closed loop: on each flagged channel every candidate physics (gain,
+    /// time_constant, dead_time, missing_coupling, dead_zone, saturation, quadratic, cubic,
+    /// bilinear, backlash, coulomb_friction, abs_sensor) is fitted as a correction, instrumented
+    /// by the dither-driven part of the inputs, and scored by one-step prediction error under a
+    /// noise model. Both choose by blocked cross-validation inside the training part with a
+    /// parsimony penalty. (3) Gate: a finding is reported only when its correction raises the
+    /// FIT on held-back training data by --min-gain points; otherwise `unexplained`, naming the
+    /// best candidate and its gain. (4) Prove: FIT% before → after on the last
     /// --holdout-fraction of the record, which no step above has seen.
     ///
     /// Example: mpmwatch diagnose --recorded rec.csv --simulated sim.csv --inputs u1,u2
@@ -111,9 +116,12 @@ enum Verb {
     /// disturbance-only and no-change cases; 1×1, 2×2, 3×3; binary and uniform dithers) and the
     /// real recordings under --data (Silverbox, coupled electric drives, TCLab, cascaded tanks),
     /// and writes DIR/casebook.md (table, rates, figures) and DIR/casebook.json. Progress on
-    /// stderr. Takes several minutes in a release build.
+    /// stderr. Takes several minutes in a release build. --wide COUNT replaces the 28 fixed
+    /// cases by COUNT cases whose plant, PI tuning, disturbance, dither level and effect are all
+    /// drawn at random: the check on cases nobody picked.
     ///
     /// Example: cargo run --release -- casebook --out out/casebook --data ../shared/data
+    ///          cargo run --release -- casebook --out out/wide --wide 60 --seed 7000 --simulated-only
     Casebook(cmd::casebook::Args),
 }
 

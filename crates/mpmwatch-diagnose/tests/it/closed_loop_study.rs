@@ -1,10 +1,11 @@
-//! The casebook's concealed closed-loop cases (`mpmwatch_sim::scenarios::casebook_specs`) with the
-//! grey-box structures explaining the outputs the dithers flag (`GREYBOX=1`) or the residual
-//! corrections (default). Ignored; `SEED=100 GREYBOX=1 cargo test -p mpmwatch-diagnose --test it
-//! closed_loop_study -- --ignored --nocapture` prints one line per case and the casebook's rates.
+//! Concealed closed-loop cases, the casebook's (`mpmwatch_sim::scenarios::casebook_specs`) or
+//! `WIDE=count` drawn by `wide_specs`, with the grey-box structures explaining the outputs the
+//! dithers flag (`GREYBOX=1`) or the residual corrections (default). Ignored; `SEED=100
+//! cargo test -p mpmwatch-diagnose --test it closed_loop_study -- --ignored --nocapture` prints
+//! one line per case and the rates (`VERBOSE=1` adds each case's draw).
 
 use mpmwatch_diagnose::{DiagnoseOptions, Physics, diagnose_numbered};
-use mpmwatch_sim::scenarios::{casebook_specs, run};
+use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
 
 #[test]
 #[ignore]
@@ -15,11 +16,20 @@ fn closed_loop_study() {
     let only = std::env::var("CASE").ok();
     let opts = DiagnoseOptions { greybox_closed_loop: greybox, ..Default::default() };
     let (mut named, mut chan, mut total, mut alarms, mut nulls, mut fell) = (0, 0, 0, 0, 0, 0);
-    for spec in casebook_specs(n, seed) {
+    let wide: Option<usize> = std::env::var("WIDE").ok().and_then(|v| v.parse().ok());
+    let verbose = std::env::var_os("VERBOSE").is_some();
+    let specs = match wide {
+        Some(count) => wide_specs(count, n, seed),
+        None => casebook_specs(n, seed),
+    };
+    for spec in specs {
         if only.as_ref().is_some_and(|o| !spec.name.contains(o.as_str())) {
             continue;
         }
         let rec = run(&spec).unwrap();
+        if verbose {
+            eprintln!("  {:?} ratio {:.2} strength {:.3} draw {:?}", spec.channel, rec.effect_ratio, rec.strength, spec.plant);
+        }
         let d = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &opts).unwrap();
         let (ci, cj) = spec.channel;
         let (tin, tout) = (format!("u{}", ci + 1), format!("y{}", cj + 1));
@@ -39,6 +49,20 @@ fn closed_loop_study() {
         } else {
             nulls += 1;
             alarms += usize::from(!d.report.findings.is_empty());
+        }
+        if verbose {
+            for g in &d.report.findings {
+                for t in &g.tried {
+                    eprintln!(
+                        "    {}→{} tried {:<16} score−null {:>9.1} validation gain {:6.2}",
+                        g.input,
+                        g.output,
+                        t.physics.name(),
+                        t.score_vs_null.unwrap_or(f64::NAN),
+                        t.validation_gain_pct
+                    );
+                }
+            }
         }
         let reported = f.is_some_and(|f| f.physics != Physics::Unexplained);
         fell += usize::from(reported && fa < fb);

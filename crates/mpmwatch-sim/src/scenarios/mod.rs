@@ -15,6 +15,9 @@ use serde::Serialize;
 
 use super::{Excitation, SimError, white_gaussian};
 
+mod wide;
+pub use wide::{NoiseDraw, PlantDraw, wide_specs};
+
 /// Standard deviation of every dither. Large against the disturbance (0.3) so that most of an
 /// effect on the input side is driven by the dither, which is what makes it detectable at all;
 /// the effect stays concealed in the residual by its size against the disturbance.
@@ -102,6 +105,9 @@ pub struct ScenarioSpec {
     pub seed: u64,
     /// Target ratio of effect to disturbance variance in the residual.
     pub target_ratio: f64,
+    /// Plant, controller, disturbance and dither drawn by [`wide_specs`]; `None` for the
+    /// casebook's fixed ones.
+    pub plant: Option<PlantDraw>,
 }
 
 fn ser_exc<S: serde::Serializer>(e: &Excitation, s: S) -> Result<S::Ok, S::Error> {
@@ -131,11 +137,14 @@ pub struct ScenarioRecord {
 }
 
 /// A first-order-plus-dead-time channel `x(t) = a·x(t−1) + K(1−a)·w(t−1−d)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Fopdt {
-    k: f64,
-    a: f64,
-    d: usize,
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Fopdt {
+    /// Static gain.
+    pub k: f64,
+    /// Pole, in (0, 1).
+    pub a: f64,
+    /// Dead time in samples beyond the one-sample delay.
+    pub d: usize,
 }
 
 fn nominal(size: usize, i: usize, j: usize) -> Fopdt {
@@ -189,25 +198,33 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
         return Err(SimError::parameter("missing coupling channel", spec.channel.0, "must be off-diagonal"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
-    let d = spec.excitation.generate_many(spec.n, spec.size, DITHER_STD, &mut rng)?;
+    let dither_std = spec.plant.as_ref().map_or(DITHER_STD, |p| p.dither_std);
+    let d = spec.excitation.generate_many(spec.n, spec.size, dither_std, &mut rng)?;
     let slow = spec.effect == Effect::DisturbanceOnly;
     let e: Vec<Vec<f64>> =
         (0..spec.size).map(|_| white_gaussian(spec.n + 200, 1.0, &mut rng)).collect::<Result<_, _>>()?;
-    let (pole, std): (f64, f64) = if slow { (0.97, 0.6) } else { (0.9, 0.3) };
-    let v: Vec<Vec<f64>> = e
-        .iter()
-        .map(|e| {
-            let mut x = 0.0;
-            let g = std * (1.0 - pole * pole).sqrt();
+    let v: Vec<Vec<f64>> = match &spec.plant {
+        Some(p) => {
+            let noise = if slow { p.noise.slowed() } else { p.noise };
+            e.iter().map(|e| noise.filter(e, &mut rng)).collect()
+        }
+        None => {
+            let (pole, std): (f64, f64) = if slow { (0.97, 0.6) } else { (0.9, 0.3) };
             e.iter()
-                .map(|w| {
-                    x = pole * x + g * w;
-                    x
+                .map(|e| {
+                    let mut x = 0.0;
+                    let g = std * (1.0 - pole * pole).sqrt();
+                    e.iter()
+                        .map(|w| {
+                            x = pole * x + g * w;
+                            x
+                        })
+                        .skip(200)
+                        .collect()
                 })
-                .skip(200)
                 .collect()
-        })
-        .collect();
+        }
+    };
     if !spec.effect.is_mismatch() {
         return Ok(simulate(spec, 0.0, &d, &v));
     }
@@ -229,6 +246,28 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
         Effect::MissingCoupling => 2.0,
         _ => 0.98,
     };
+    let unbounded = matches!(
+        spec.effect,
+        Effect::Gain
+            | Effect::Quadratic
+            | Effect::Cubic
+            | Effect::Bilinear
+            | Effect::CubicOutput
+            | Effect::MissingCoupling
+            | Effect::CoulombFriction
+    );
+    // A drawn plant can need more than the casebook's range to reach its ratio: the range of an
+    // unbounded strength is widened (up to 2⁶ times) until the ratio is reached or the loop breaks.
+    let mut t_max = t_max;
+    if spec.plant.is_some() && unbounded {
+        for _ in 0..6 {
+            let r = simulate(spec, t_max, &d, &v);
+            if !r.effect_ratio.is_finite() || r.effect_ratio >= spec.target_ratio {
+                break;
+            }
+            t_max *= 2.0;
+        }
+    }
     let (mut lo, mut hi) = (0.0, t_max);
     let mut best: Option<ScenarioRecord> = None;
     let mut keep = |r: ScenarioRecord| {
@@ -285,13 +324,14 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
     let (ci, cj) = spec.channel;
     let eff = spec.effect;
     let mut plant = vec![vec![nominal(m, 0, 0); m]; m];
-    let mut model = plant.clone();
     for j in 0..m {
         for i in 0..m {
-            plant[j][i] = nominal(m, i, j);
-            model[j][i] = nominal(m, i, j);
+            plant[j][i] = spec.plant.as_ref().map_or(nominal(m, i, j), |p| p.channels[j][i]);
         }
     }
+    let mut model = plant.clone();
+    // Effect sizes on the input side scale with the dither, which drives them.
+    let ds = spec.plant.as_ref().map_or(DITHER_STD, |p| p.dither_std);
     match eff {
         Effect::Gain => plant[cj][ci].k *= 1.0 + t,
         Effect::TimeConstant => {
@@ -305,8 +345,9 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
         }
         _ => {}
     }
-    let sp: Vec<f64> =
-        (0..m).map(|j| if eff == Effect::AbsSensor && j == cj { abs_sp(t) } else { 0.0 }).collect();
+    let sp: Vec<f64> = (0..m)
+        .map(|j| if eff == Effect::AbsSensor && j == cj { abs_sp(t) * ds * plant[j][j].k.abs() } else { 0.0 })
+        .collect();
     let mut u = vec![vec![0.0; n]; m];
     let mut uc = vec![0.0; m];
     let mut e_prev = vec![0.0; m];
@@ -332,10 +373,14 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
             y[j][k] = h + v[j][k];
         }
         for j in 0..m {
-            // Diagonal PI, velocity form, mild tuning (Kc 0.3, Ti = the diagonal time constant).
-            let ti = -1.0 / plant[j][j].a.ln().min(-1e-3);
+            // Diagonal PI, velocity form; the casebook's mild tuning is Kc 0.3, Ti = the diagonal
+            // time constant.
+            let (kc, ti) = match &spec.plant {
+                Some(p) => (p.pi_gain[j], p.pi_ti[j]),
+                None => (0.3, -1.0 / plant[j][j].a.ln().min(-1e-3)),
+            };
             let err = sp[j] - y[j][k];
-            uc[j] += 0.3 * (err - e_prev[j] + err / ti);
+            uc[j] += kc * (err - e_prev[j] + err / ti);
             e_prev[j] = err;
             u[j][k] = uc[j] + d[j][k];
         }
@@ -347,15 +392,15 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
                     let up = if k > 0 { u[i][k - 1] } else { 0.0 };
                     wi = match eff {
                         Effect::DeadZone => {
-                            let wd = 2.0 * t;
+                            let wd = 2.0 * t * ds;
                             ui.signum() * (ui.abs() - wd).max(0.0)
                         }
-                        Effect::Saturation => ui.clamp(-sat_limit(t), sat_limit(t)),
+                        Effect::Saturation => ui.clamp(-sat_limit(t) * ds, sat_limit(t) * ds),
                         Effect::Quadratic => ui + t * (ui * ui - q0),
                         Effect::Cubic => ui + t * ui * ui * ui,
                         Effect::Bilinear => ui + t * ui * up,
                         Effect::Backlash => {
-                            let h = t;
+                            let h = t * ds;
                             if ui > bl + h {
                                 bl = ui - h;
                             } else if ui < bl - h {
@@ -450,6 +495,7 @@ pub fn casebook_specs(n: usize, seed: u64) -> Vec<ScenarioSpec> {
             n,
             seed: seed + k as u64,
             target_ratio,
+            plant: None,
         })
         .collect()
 }

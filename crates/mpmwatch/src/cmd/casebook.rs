@@ -9,7 +9,7 @@ use mpmwatch::report::figures::{BeforeAfter, write_before_after_chart};
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::model::{Arx, ArxOrders};
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose_numbered, fit_pct};
-use mpmwatch_sim::scenarios::{casebook_specs, describe, run as run_case};
+use mpmwatch_sim::scenarios::{casebook_specs, describe, run as run_case, wide_specs};
 use serde_json::json;
 
 /// Arguments of the verb (documented on the verb in `main.rs`).
@@ -37,20 +37,30 @@ pub struct Args {
     /// Skip the simulated cases (only the real recordings).
     #[arg(long, conflicts_with = "simulated_only")]
     real_only: bool,
+    /// Instead of the casebook's 28 fixed cases, COUNT cases drawn by the wide generator: each
+    /// with its own plant, PI tuning, disturbance spectrum, dither level, effect, channel, size
+    /// and concealment ratio (0.1–0.8). Case k uses seed + k.
+    #[arg(long, value_name = "COUNT")]
+    wide: Option<usize>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let fig = args.out.join("figures");
     std::fs::create_dir_all(&fig).with_context(|| format!("creating {}", fig.display()))?;
     let opts = DiagnoseOptions::default();
-    let mut specs = if args.real_only { Vec::new() } else { casebook_specs(args.n, args.seed) };
+    let mut specs = match (args.real_only, args.wide) {
+        (true, _) => Vec::new(),
+        (false, Some(count)) => wide_specs(count, args.n, args.seed),
+        (false, None) => casebook_specs(args.n, args.seed),
+    };
     if !args.only.is_empty() {
         specs.retain(|s| args.only.iter().any(|o| s.name.contains(o.as_str())));
     }
     let mut rows = Vec::new();
     let mut md = String::from("# Diagnosis casebook\n\n");
     md.push_str(&format!(
-        "Simulated concealed cases: {} samples each, seeds {}..{}, 30 % held out, MI with {} surrogates (seed {}), lags 1..={}.\n\n",
+        "Simulated concealed cases{}: {} samples each, seeds {}..{}, 30 % held out, MI with {} surrogates (seed {}), lags 1..={}.\n\n",
+        if args.wide.is_some() { " (wide generator: every plant, loop, disturbance and effect drawn)" } else { "" },
         args.n,
         args.seed,
         args.seed + specs.len() as u64 - 1,
@@ -60,7 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ));
     md.push_str("The CCF column: any lag of the linear cross-correlation of the true channel's dither with its residual beyond the family-wise (Bonferroni, α = 0.05 over the lags) limit of the MI matrix's baseline.\n\n");
     md.push_str("| case | true effect | effect/disturbance variance | channel found | physics named | held-out FIT before → after | did the CCF see it? |\n| --- | --- | --- | --- | --- | --- | --- |\n");
-    let (mut named, mut chan, mut total, mut false_alarms, mut quiet) = (0, 0, 0, 0, 0);
+    let (mut named, mut chan, mut total, mut false_alarms, mut quiet, mut fell) = (0, 0, 0, 0, 0, 0);
     let mut fit_items = Vec::new();
     for (k, spec) in specs.iter().enumerate() {
         eprintln!("[{}/{}] {} (seed {})", k + 1, specs.len(), spec.name, spec.seed);
@@ -90,7 +100,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let right_physics =
             finding.is_some_and(|f| f.physics.name() == spec.effect.physics() && right_channel);
         let success = if spec.effect.is_mismatch() { right_physics } else { dg.report.findings.is_empty() };
-        fit_items.push(BeforeAfter { label: spec.name[..3].to_string(), before: fb, after: fa, success });
+        fit_items.push(BeforeAfter { label: spec.name.split('_').next().unwrap_or_default().to_string(), before: fb, after: fa, success });
         case_figure(
             &fig,
             spec.name.as_str(),
@@ -100,6 +110,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             &dg.corrected[cj],
             dg.report.holdout.start_index,
         )?;
+        let reported = finding.is_some_and(|f| f.physics != Physics::Unexplained);
+        fell += usize::from(reported && fa < fb);
         if spec.effect.is_mismatch() {
             total += 1;
             named += usize::from(right_physics);
@@ -142,9 +154,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "channel_rate": chan as f64 / total.max(1) as f64,
         "null_cases_quiet": quiet,
         "null_cases_with_findings": false_alarms,
+        "reported_findings_whose_held_out_fit_fell": fell,
     });
     md.push_str(&format!(
-        "\n**Measured:** physics named right in {named}/{total} mismatch cases ({:.0} %, target ≥ 90 %); right channel in {chan}/{total} ({:.0} %, target ≥ 95 %); findings in {false_alarms} of {} disturbance-only and no-change cases (target 0).\n\n",
+        "\n**Measured:** physics named right in {named}/{total} mismatch cases ({:.0} %, target ≥ 90 %); right channel in {chan}/{total} ({:.0} %, target ≥ 95 %); findings in {false_alarms} of {} disturbance-only and no-change cases (target 0); reported findings whose held-out FIT fell: {fell} (target 0).\n\n",
         100.0 * named as f64 / total.max(1) as f64,
         100.0 * chan as f64 / total.max(1) as f64,
         false_alarms + quiet
@@ -161,7 +174,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         md.push_str("Triangle: physics named right (null cases: no finding); cross: wrong physics, or a finding on a null case. Green: FIT rose; red: it fell.\n\n");
         md.push_str("Each case's held-out tail (last 200 samples of the output that carries the effect; recorded, simulated, corrected): ");
         let links: Vec<String> =
-            specs.iter().map(|s| format!("[{}](figures/case_{}.png)", &s.name[..3], s.name)).collect();
+            specs.iter().map(|s| format!("[{}](figures/case_{}.png)", s.name.split('_').next().unwrap_or_default(), s.name)).collect();
         md.push_str(&links.join(" · "));
         md.push_str(".\n\n");
     }

@@ -56,6 +56,10 @@ pub struct Args {
     /// loop, the default); `shifted` and `projected`: the two earlier criteria, kept to compare.
     #[arg(long, value_enum, default_value_t = ScoringArg::Prediction)]
     scoring: ScoringArg,
+    /// The honesty gate: a finding is reported only when its correction raises the FIT on
+    /// held-back training data by at least this many points (never on the held-out tail).
+    #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().min_gain_pct)]
+    min_gain: f64,
 }
 
 /// `--scoring` values (kept out of the library, which has no command-line types).
@@ -149,6 +153,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed: args.seed,
         lags: Lags::new(1, args.tmax)?,
         scoring: args.scoring.into(),
+        min_gain_pct: args.min_gain,
         ..DiagnoseOptions::default()
     };
     let dg = diagnose(&input, &opts)?;

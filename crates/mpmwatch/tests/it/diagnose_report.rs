@@ -19,6 +19,7 @@ fn spec(effect: Effect, excitation: Excitation, seed: u64) -> ScenarioSpec {
         n: 2000,
         seed,
         target_ratio: 0.6,
+        plant: None,
     }
 }
 
