@@ -12,7 +12,7 @@
 //! and m_i counts samples at distance 0.
 
 use super::digamma::digamma;
-use super::marginal::{count_strictly_within_range, count_within, kth_neighbour_distance};
+use super::marginal::{count_strictly_within_range, count_within, kth_neighbour_distance, total_order};
 
 /// The distinct levels of a discrete series and each sample's level index.
 #[derive(Debug, Clone, PartialEq)]
@@ -128,12 +128,6 @@ pub(crate) fn ross(levels: &Levels, y: &[f64], k: usize) -> f64 {
     let (y_sorted, labels): (Vec<f64>, Vec<u16>) =
         pairs.into_iter().map(|(k, l)| (f64::from_bits(total_order(k) as u64), l)).unzip();
     ross_sorted(&y_sorted, &labels, levels.count(), k)
-}
-
-/// The bits of an `f64` as an integer ordered as `f64::total_cmp` orders the floats (the
-/// magnitude bits of negatives flipped, as `total_cmp` does); its own inverse.
-fn total_order(bits: i64) -> i64 {
-    bits ^ (((bits >> 63) as u64) >> 1) as i64
 }
 
 #[cfg(test)]

@@ -15,13 +15,16 @@ pub struct SortedMarginal {
 impl SortedMarginal {
     /// Sorts a copy of `values` (which must be finite).
     pub fn new(values: &[f64]) -> Self {
-        let mut order: Vec<u32> = (0..values.len() as u32).collect();
-        order.sort_unstable_by(|&a, &b| values[a as usize].total_cmp(&values[b as usize]));
+        // (key, index) pairs compared in place by an integer key, where sorting indices would
+        // fetch both values and re-derive `total_cmp`'s order at every comparison.
+        let mut pairs: Vec<(i64, u32)> =
+            values.iter().enumerate().map(|(i, &v)| (total_order(v.to_bits() as i64), i as u32)).collect();
+        pairs.sort_unstable_by_key(|p| p.0);
         let mut position = vec![0u32; values.len()];
-        for (p, &i) in order.iter().enumerate() {
+        for (p, &(_, i)) in pairs.iter().enumerate() {
             position[i as usize] = p as u32;
         }
-        let sorted = order.iter().map(|&i| values[i as usize]).collect();
+        let sorted = pairs.iter().map(|&(key, _)| f64::from_bits(total_order(key) as u64)).collect();
         Self { sorted, position }
     }
 
@@ -41,6 +44,12 @@ impl SortedMarginal {
     pub fn count_within(&self, c: f64, r: f64) -> usize {
         count_within(&self.sorted, c, r)
     }
+}
+
+/// The bits of an `f64` as an integer ordered as `f64::total_cmp` orders the floats (the
+/// magnitude bits of negatives flipped, as `total_cmp` does); its own inverse.
+pub(crate) fn total_order(bits: i64) -> i64 {
+    bits ^ (((bits >> 63) as u64) >> 1) as i64
 }
 
 /// Number of elements of the sorted slice strictly within `r` of the element at position `p`
