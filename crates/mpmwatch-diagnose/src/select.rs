@@ -72,15 +72,14 @@ pub struct Split {
     /// Rows used to fit during selection (the first 70 % of the training part; grids and
     /// feature sets are built on them).
     pub fit: std::ops::Range<usize>,
-    /// Rows used to score during selection (the end of the training part).
-    pub validate: std::ops::Range<usize>,
     /// Cross-validation folds within the training part: (fit rows, validation block).
     pub folds: Vec<(Vec<usize>, std::ops::Range<usize>)>,
     /// The whole training part (the final refit).
     pub train: std::ops::Range<usize>,
-    /// Some input moves with more than its excitations (a controller acts on it): the plain
-    /// validation FIT is then not the criterion (see `decide`). False in open loop, and when
-    /// the excitations given are the inputs themselves.
+    /// Some input moves with more than its excitations (a controller acts on it): hypotheses
+    /// are then scored by prediction error, and the honesty gate also asks that no block's
+    /// plain FIT falls (see `decide`). False in open loop, and when the excitations given are
+    /// the inputs themselves.
     pub closed_loop: bool,
 }
 

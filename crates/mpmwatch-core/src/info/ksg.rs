@@ -352,7 +352,8 @@ mod tests {
         // take several rings; y ≈ x crowds the diagonal cells. Deterministic pseudo-random draws.
         let u = |i: usize, m: usize| ((i * m) % 10007) as f64 / 10007.0 + 0.5 / 10007.0;
         let heavy: Vec<f64> = (0..3000).map(|i| (std::f64::consts::PI * (u(i, 7919) - 0.5)).tan()).collect();
-        let other: Vec<f64> = (0..3000).map(|i| (std::f64::consts::PI * (u(i, 104729) - 0.5)).tan()).collect();
+        let other: Vec<f64> =
+            (0..3000).map(|i| (std::f64::consts::PI * (u(i, 104729) - 0.5)).tan()).collect();
         let close: Vec<f64> = heavy.iter().enumerate().map(|(i, v)| v + 0.01 * (u(i, 31337) - 0.5)).collect();
         for (x, y) in [(&heavy, &other), (&heavy, &close)] {
             for k in [1, 4, 10] {

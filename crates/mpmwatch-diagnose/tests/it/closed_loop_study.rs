@@ -28,7 +28,10 @@ fn closed_loop_study() {
         }
         let rec = run(&spec).unwrap();
         if verbose {
-            eprintln!("  {:?} ratio {:.2} strength {:.3} draw {:?}", spec.channel, rec.effect_ratio, rec.strength, spec.plant);
+            eprintln!(
+                "  {:?} ratio {:.2} strength {:.3} draw {:?}",
+                spec.channel, rec.effect_ratio, rec.strength, spec.plant
+            );
         }
         let d = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &opts).unwrap();
         let (ci, cj) = spec.channel;

@@ -63,7 +63,8 @@ fn quadratic() {
 /// candidate, and no correction.
 #[test]
 fn cubic_is_withheld_when_it_does_not_improve_out_of_sample() {
-    let spec = casebook_specs(3000, 100).into_iter().find(|s| s.name.starts_with("c15_")).expect("casebook case");
+    let spec =
+        casebook_specs(3000, 100).into_iter().find(|s| s.name.starts_with("c15_")).expect("casebook case");
     let rec = run(&spec).unwrap();
     let d = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &DiagnoseOptions::default()).unwrap();
     let f = d.report.findings.iter().find(|f| f.output == "y1").expect("a finding on y1");

@@ -61,7 +61,13 @@ impl NoiseDraw {
     /// The disturbance of a disturbance-only case: slower (pole 0.98), twice as large, with
     /// three more load steps.
     pub fn slowed(&self) -> Self {
-        Self { a1: 0.98, a2: 0.0, std: 2.0 * self.std, steps: self.steps + 3, step_std: self.step_std.max(self.std) }
+        Self {
+            a1: 0.98,
+            a2: 0.0,
+            std: 2.0 * self.std,
+            steps: self.steps + 3,
+            step_std: self.step_std.max(self.std),
+        }
     }
 }
 
@@ -99,7 +105,11 @@ fn draw_plant(size: usize, rng: &mut impl Rng) -> PlantDraw {
                         }
                     } else {
                         let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
-                        Fopdt { k: sign * rng.random_range(0.1..0.5), a: rng.random_range(0.5..0.9), d: rng.random_range(1..=4) }
+                        Fopdt {
+                            k: sign * rng.random_range(0.1..0.5),
+                            a: rng.random_range(0.5..0.9),
+                            d: rng.random_range(1..=4),
+                        }
                     }
                 })
                 .collect()
@@ -136,7 +146,9 @@ fn loop_is_stable(spec: &ScenarioSpec) -> bool {
     let probe = ScenarioSpec { effect: Effect::NoChange, ..spec.clone() };
     let n = probe.n;
     let zeros = vec![vec![0.0; n]; probe.size];
-    let ones: Vec<Vec<f64>> = (0..probe.size).map(|i| (0..n).map(|k| if (k / 50 + i) % 2 == 0 { p.dither_std } else { -p.dither_std }).collect()).collect();
+    let ones: Vec<Vec<f64>> = (0..probe.size)
+        .map(|i| (0..n).map(|k| if (k / 50 + i) % 2 == 0 { p.dither_std } else { -p.dither_std }).collect())
+        .collect();
     let rec = simulate(&probe, 0.0, &ones, &zeros);
     let bound = 20.0 * p.dither_std * p.channels.iter().flatten().map(|c| c.k.abs()).sum::<f64>();
     rec.y.iter().chain(rec.u.iter()).flatten().all(|v| v.is_finite() && v.abs() < bound)
@@ -170,7 +182,8 @@ pub fn wide_specs(count: usize, n: usize, seed: u64) -> Vec<ScenarioSpec> {
         .map(|k| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(k).wrapping_mul(0x9E37_79B9_7F4A_7C15));
             let effect = EFFECTS[rng.random_range(0..EFFECTS.len())];
-            let size = if effect == MissingCoupling { rng.random_range(2..=3) } else { rng.random_range(1..=3) };
+            let size =
+                if effect == MissingCoupling { rng.random_range(2..=3) } else { rng.random_range(1..=3) };
             let channel = match effect {
                 MissingCoupling => {
                     let i = rng.random_range(0..size);

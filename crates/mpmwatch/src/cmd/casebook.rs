@@ -100,7 +100,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let right_physics =
             finding.is_some_and(|f| f.physics.name() == spec.effect.physics() && right_channel);
         let success = if spec.effect.is_mismatch() { right_physics } else { dg.report.findings.is_empty() };
-        fit_items.push(BeforeAfter { label: spec.name.split('_').next().unwrap_or_default().to_string(), before: fb, after: fa, success });
+        fit_items.push(BeforeAfter {
+            label: spec.name.split('_').next().unwrap_or_default().to_string(),
+            before: fb,
+            after: fa,
+            success,
+        });
         case_figure(
             &fig,
             spec.name.as_str(),
@@ -173,8 +178,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         md.push_str("![held-out FIT before and after, per case](figures/casebook_fit.png)\n\n");
         md.push_str("Triangle: physics named right (null cases: no finding); cross: wrong physics, or a finding on a null case. Green: FIT rose; red: it fell.\n\n");
         md.push_str("Each case's held-out tail (last 200 samples of the output that carries the effect; recorded, simulated, corrected): ");
-        let links: Vec<String> =
-            specs.iter().map(|s| format!("[{}](figures/case_{}.png)", s.name.split('_').next().unwrap_or_default(), s.name)).collect();
+        let links: Vec<String> = specs
+            .iter()
+            .map(|s| {
+                format!("[{}](figures/case_{}.png)", s.name.split('_').next().unwrap_or_default(), s.name)
+            })
+            .collect();
         md.push_str(&links.join(" · "));
         md.push_str(".\n\n");
     }
