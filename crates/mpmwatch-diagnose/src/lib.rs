@@ -91,7 +91,9 @@ pub struct DiagnoseOptions {
     pub lags: Lags,
     /// Multiplier of the BIC penalty per coefficient (default 1).
     pub penalty: f64,
-    /// Smallest validation FIT gain, in points, that counts as an explanation (default 0.5).
+    /// The honesty gate's margin (default 0.5): a finding is reported only when its correction
+    /// raises the plain FIT, refitted on two blocks of the training part and scored on the
+    /// third, by this many points on average (and, in a closed loop, lowers no block).
     pub min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,
@@ -667,22 +669,28 @@ fn decide(
 ) -> (Finding, Option<Vec<f64>>) {
     let y = input.outputs[j].values;
     let null_score = ranked.iter().find(|s| s.fitted.is_none()).map_or(f64::INFINITY, |s| s.score);
-    // Per class: its best score against the null, and its cross-validated FIT gain.
+    // Per class: its best score against the null, and its cross-validated FIT gain. A class
+    // whose refit fails on a fold has no gain to show and is left out of `tried`.
     let mut tried: Vec<Tried> = Vec::new();
-    let mut gains: Vec<Option<CvGain>> = Vec::new();
+    let mut seen: Vec<Physics> = Vec::new();
+    // The cross-validated gain of the best-ranked fitted hypothesis (`None`: its refit failed).
+    let mut top_gain: Option<Option<CvGain>> = None;
     for s in ranked {
         let Some(f) = &s.fitted else { continue };
         let ph = f.term.physics();
-        if tried.iter().any(|t| t.physics == ph) {
+        if seen.contains(&ph) {
             continue;
         }
+        seen.push(ph);
         let g = cv_gain(y, ctx, inst, r, f, split);
-        tried.push(Tried {
-            physics: ph,
-            score_vs_null: Some(s.score - null_score),
-            validation_gain_pct: g.map_or(f64::NEG_INFINITY, |g| g.mean),
-        });
-        gains.push(g);
+        top_gain.get_or_insert(g);
+        if let Some(g) = g {
+            tried.push(Tried {
+                physics: ph,
+                score_vs_null: Some(s.score - null_score),
+                validation_gain_pct: g.mean,
+            });
+        }
     }
     let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
     // The honesty gate: the winner must also raise the plain FIT (what the held-out FIT
@@ -692,7 +700,8 @@ fn decide(
     // correction can lower it), and a finding that loses on one block is withheld rather than
     // shown with a falling fit.
     let passes = |g: &CvGain| g.mean >= opts.min_gain_pct && (!split.closed_loop || g.min >= 0.0);
-    let best = best.filter(|_| gains.first().copied().flatten().is_some_and(|g| passes(&g)));
+    let top_gain = top_gain.flatten();
+    let best = best.filter(|_| top_gain.is_some_and(|g| passes(&g)));
     let out_name = input.outputs[j].name;
     if let Some(f) = best.and_then(|b| b.fitted.clone()) {
         // Refit the chosen hypothesis (its grid values fixed) on the whole training part.
@@ -718,14 +727,16 @@ fn decide(
     }
     let names: Vec<&str> = flagged.iter().map(|&i| input.inputs[i].name).collect();
     let classes: Vec<&str> = tried.iter().map(|t| t.physics.name()).collect();
-    let best_candidate = tried
+    let best_candidate = ranked
         .first()
-        .filter(|_| ranked.first().is_some_and(|s| s.fitted.is_some()))
-        .map(|t| {
+        .and_then(|s| s.fitted.as_ref())
+        .zip(top_gain)
+        .map(|(f, g)| {
             format!(
-                "; the best-scored candidate, {}, changes the cross-validated FIT by {:+.1} points (a finding needs {:+.1} on average{})",
-                t.physics.name(),
-                t.validation_gain_pct,
+                "; the best-scored candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block (a finding needs {:+.1} on average{})",
+                f.term.physics().name(),
+                g.mean,
+                g.min,
                 opts.min_gain_pct,
                 if split.closed_loop { " and, in a closed loop, no block lower" } else { "" }
             )

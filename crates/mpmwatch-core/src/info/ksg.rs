@@ -3,8 +3,9 @@
 //! `I = ψ(k) + ψ(N) − ⟨ψ(n_x + 1) + ψ(n_y + 1)⟩` (Kraskov et al. 2004, eq 8): for each sample the
 //! max-norm distance ε to its k-th neighbour in the joint space, then the numbers of other
 //! samples strictly closer than ε in each marginal. For a 1-D X the joint search runs on a grid
-//! of rank cells; for a wider X it uses `kiddo`'s immutable kd-tree (the mutable one fails on
-//! many identical points). 1-D marginals are sorted arrays.
+//! of equal-width cells (a cell list) unless the points crowd a few cells; otherwise, and for a
+//! wider X, it uses `kiddo`'s immutable kd-tree (the mutable one fails on many identical
+//! points). 1-D marginals are sorted arrays.
 //!
 //! Ties (quantised or clipped signals) can make ε = 0. There the estimator follows Gao, Kannan,
 //! Oh and Viswanath (2017, "Estimating mutual information for discrete–continuous mixtures"):
@@ -95,27 +96,39 @@ fn combine(n: usize, k_eff: &[usize], nx: &[usize], ny: &[usize]) -> f64 {
 /// its k-th distance found (in the max norm, any point beyond that edge is at least that far).
 /// Where the points are dense that is one or two rings, a few dozen points, where a kd-tree
 /// descends and backtracks through nodes; sparse tails take more rings and stay exact.
+/// Most points one grid cell may hold, in multiples of the cells per axis (`√(2N)`): 256, an
+/// eighth of the points, at N = 2048. Independent normal data put at most about 2 in a cell, and a y that is
+/// an exact function of x puts about `√(N/2)` in a diagonal cell; a crowd beyond that is a
+/// degenerate axis, which the kd-tree handles in O(N log N) where the grid would be O(N²).
+const CROWDED: usize = 4;
+
 fn joint_neighbours_2d(
     x: &[f64],
     y: &[f64],
     mx: &SortedMarginal,
     my: &SortedMarginal,
     k: usize,
-) -> JointNeighbours {
+) -> Option<JointNeighbours> {
     let n = x.len();
-    // Interior cells of equal width between the 0.5 % and 99.5 % quantiles, `√N` of them per
-    // axis, and one open cell at each end for the outliers: square cells in the data's units
-    // (a max-norm ball is a square), about four points a cell where the density is highest for
-    // standardised, roughly normal data, so that one ring of cells usually ends a query.
+    // Interior cells of equal width between each axis' 0.5 % and 99.5 % quantiles, `√(2N)` of
+    // them per axis, and one open cell at each end for the outliers: square cells when both
+    // axes have the same spread (standardised data; a max-norm ball is a square), about two
+    // points a cell where the density is highest for roughly normal data, so that the block of
+    // a cell and its neighbours usually ends a query.
     let inner = ((2.0 * n as f64).sqrt().ceil() as usize).clamp(1, 512);
     let g = inner + 2;
     // Cell of every point on one axis, and the axis' cut points: cell a holds the values in
     // [cut[a], cut[a + 1]), so equal values share a cell (the tie rule below counts a point's
     // exact duplicates in its own cell only).
-    let axis = |v: &[f64], m: &SortedMarginal| -> (Vec<u32>, Vec<f64>) {
+    let axis = |v: &[f64], m: &SortedMarginal| -> Option<(Vec<u32>, Vec<f64>)> {
         let sorted = m.values();
         let (lo, hi) = (sorted[n / 200], sorted[(n - 1) - n / 200]);
         let h = (hi - lo) / inner as f64;
+        // 99 % of the axis at one value: its cells would have no width, no ring would ever
+        // reach past a query's k-th distance, and each query would scan the whole grid.
+        if h <= 0.0 {
+            return None;
+        }
         let mut cut = vec![f64::NEG_INFINITY; g + 1];
         for (a, c) in cut.iter_mut().enumerate().take(g).skip(1) {
             *c = lo + (a - 1) as f64 * h;
@@ -124,7 +137,7 @@ fn joint_neighbours_2d(
         let cell = v
             .iter()
             .map(|&t| {
-                let guess = if h > 0.0 { ((t - lo) / h).floor() + 1.0 } else { 1.0 };
+                let guess = ((t - lo) / h).floor() + 1.0;
                 let mut a = guess.clamp(0.0, (g - 1) as f64) as usize;
                 while a > 0 && t < cut[a] {
                     a -= 1;
@@ -135,13 +148,18 @@ fn joint_neighbours_2d(
                 a as u32
             })
             .collect();
-        (cell, cut)
+        Some((cell, cut))
     };
-    let (cx, cut_x) = axis(x, mx);
-    let (cy, cut_y) = axis(y, my);
+    let (cx, cut_x) = axis(x, mx)?;
+    let (cy, cut_y) = axis(y, my)?;
     let mut start = vec![0u32; g * g + 1];
     for i in 0..n {
         start[(cy[i] as usize) * g + cx[i] as usize + 1] += 1;
+    }
+    // Points crowding a few cells (an axis nearly constant, or clipped) would make every query
+    // scan them all: the caller's kd-tree is then the better search.
+    if start.iter().any(|&c| c as usize > CROWDED * inner) {
+        return None;
     }
     for c in 0..g * g {
         start[c + 1] += start[c];
@@ -249,12 +267,15 @@ fn joint_neighbours_2d(
             }
         }
     }
-    JointNeighbours { radius, k_eff }
+    Some(JointNeighbours { radius, k_eff })
 }
 
 fn ksg_1d(x: &[f64], y: &[f64], k: usize) -> f64 {
     let (mx, my) = (SortedMarginal::new(x), SortedMarginal::new(y));
-    let jn = joint_neighbours_2d(x, y, &mx, &my, k);
+    let jn = joint_neighbours_2d(x, y, &mx, &my, k).unwrap_or_else(|| {
+        let points: Vec<[f64; 2]> = x.iter().zip(y).map(|(&a, &b)| [a, b]).collect();
+        joint_neighbours(&points, k)
+    });
     let count = |m: &SortedMarginal, v: &[f64]| -> Vec<usize> {
         v.iter().zip(&jn.radius).enumerate().map(|(i, (&c, &r))| marginal_count(m, i, c, r)).collect()
     };
@@ -344,6 +365,57 @@ mod tests {
                 assert!((a - b).abs() < 1e-12, "levels {levels}, k={k}: grid {a}, tree {b}");
             }
         }
+    }
+
+    /// The grid's radius and neighbour count at every point equal the kd-tree's (`None` when
+    /// the grid declined the points).
+    fn same_neighbours(x: &[f64], y: &[f64], k: usize) -> Option<()> {
+        let (mx, my) = (SortedMarginal::new(x), SortedMarginal::new(y));
+        let grid = joint_neighbours_2d(x, y, &mx, &my, k)?;
+        let points: Vec<[f64; 2]> = x.iter().zip(y).map(|(&a, &b)| [a, b]).collect();
+        let tree = joint_neighbours(&points, k);
+        for i in 0..x.len() {
+            assert_eq!(grid.radius[i].to_bits(), tree.radius[i].to_bits(), "radius at {i}, k={k}");
+            assert_eq!(grid.k_eff[i], tree.k_eff[i], "neighbour count at {i}, k={k}");
+        }
+        Some(())
+    }
+
+    #[test]
+    fn grid_neighbours_equal_the_tree_point_by_point() {
+        let u = |i: usize, m: usize| ((i * m) % 10007) as f64 / 10007.0;
+        let a: Vec<f64> = (0..2000).map(|i| u(i, 7919)).collect();
+        let b: Vec<f64> = (0..2000).map(|i| u(i, 104729)).collect();
+        // Half the samples at −0.0 or +0.0 on one axis and distinct on the other: equal
+        // under `==`, different under `total_cmp`, and all at distance 0 from each other.
+        let zeros: Vec<f64> = (0..2000)
+            .map(|i| {
+                if i % 4 == 0 {
+                    -0.0
+                } else if i % 4 == 1 {
+                    0.0
+                } else {
+                    a[i]
+                }
+            })
+            .collect();
+        let few = [0.3, -1.0, 2.0, 0.0, 5.0];
+        let few_y = [1.0, 1.0, -2.0, 0.5, 0.0];
+        for k in [1, 4, 10] {
+            same_neighbours(&a, &b, k).expect("independent data stay on the grid");
+            same_neighbours(&zeros, &b, k).expect("a half-tied axis stays on the grid");
+        }
+        same_neighbours(&few, &few_y, 4).expect("five points, k = 4");
+    }
+
+    #[test]
+    fn a_nearly_constant_axis_goes_to_the_tree() {
+        // 99.5 % of y at one value: the y cells have no width, so no ring would end a query;
+        // the grid declines and the estimate is the kd-tree's.
+        let x: Vec<f64> = (0..2000).map(|i| ((i * 7919) % 10007) as f64).collect();
+        let y: Vec<f64> = (0..2000).map(|i| if i % 200 == 0 { i as f64 } else { 3.0 }).collect();
+        assert!(same_neighbours(&x, &y, 4).is_none(), "the grid should decline an axis without width");
+        assert!((ksg1(&[&x], &y, 4) - tree_1d(&x, &y, 4)).abs() < 1e-12);
     }
 
     #[test]

@@ -176,6 +176,28 @@ pub fn describe(effect: Effect, strength: f64) -> String {
     }
 }
 
+impl ScenarioSpec {
+    /// [`describe`] in this case's units: a drawn plant ([`wide_specs`]) scales the input-side
+    /// thresholds by its dither level, and the |x| sensor's set point also by the loop's gain.
+    pub fn describe(&self, strength: f64) -> String {
+        let Some(p) = &self.plant else { return describe(self.effect, strength) };
+        let ds = p.dither_std;
+        let j = self.channel.1;
+        match self.effect {
+            Effect::DeadZone => format!("dead zone ±{:.2}", 2.0 * strength * ds),
+            Effect::Saturation => format!("input limit ±{:.2}", sat_limit(strength) * ds),
+            Effect::Backlash => format!("backlash width {:.2}", 2.0 * strength * ds),
+            Effect::AbsSensor => {
+                format!("|x| sensor, set point {:.2}", abs_sp(strength) * ds * p.channels[j][j].k.abs())
+            }
+            Effect::NoChange | Effect::DisturbanceOnly => {
+                format!("model exact, drawn disturbance (AR {:.2}, {:.2})", p.noise.a1, p.noise.a2)
+            }
+            _ => describe(self.effect, strength),
+        }
+    }
+}
+
 fn sat_limit(t: f64) -> f64 {
     2.0 * (1.0 - t) + 0.02
 }

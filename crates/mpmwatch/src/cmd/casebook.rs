@@ -9,7 +9,7 @@ use mpmwatch::report::figures::{BeforeAfter, write_before_after_chart};
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::model::{Arx, ArxOrders};
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose_numbered, fit_pct};
-use mpmwatch_sim::scenarios::{casebook_specs, describe, run as run_case, wide_specs};
+use mpmwatch_sim::scenarios::{casebook_specs, run as run_case, wide_specs};
 use serde_json::json;
 
 /// Arguments of the verb (documented on the verb in `main.rs`).
@@ -135,7 +135,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             spec.effect.physics(),
             ci + 1,
             cj + 1,
-            describe(spec.effect, rec.strength).replace('|', "\\|"),
+            spec.describe(rec.strength).replace('|', "\\|"),
             rec.effect_ratio,
             found_channel,
             physics,
@@ -145,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ));
         rows.push(json!({
             "case": spec, "true_effect": spec.effect.physics(), "strength": rec.strength,
-            "description": describe(spec.effect, rec.strength), "effect_ratio": rec.effect_ratio,
+            "description": spec.describe(rec.strength), "effect_ratio": rec.effect_ratio,
             "channel_found": found_channel, "physics_named": physics, "right_channel": right_channel,
             "right_physics": right_physics, "ccf_saw_it": ccf, "holdout_fit_before_pct": fb,
             "holdout_fit_after_pct": fa, "report": dg.report,
