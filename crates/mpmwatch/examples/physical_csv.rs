@@ -4,9 +4,8 @@
 //!
 //! `cargo run --release --example physical_csv -- heater_voltage 1 2000 out/`
 
-use std::io::Write;
-
 use anyhow::{Context, bail};
+use mpmwatch_core::io::Table;
 use mpmwatch_sim::physical_cases::{PhysicalCase, run};
 
 fn main() -> anyhow::Result<()> {
@@ -20,20 +19,18 @@ fn main() -> anyhow::Result<()> {
         .with_context(|| format!("no case {name:?}; cases: {}", names().join(", ")))?;
     let rec = run(case, n.parse().context("SAMPLES")?, seed.parse().context("SEED")?)?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {dir}"))?;
-    let write = |file: &str, cols: &[&[f64]], header: &str| -> anyhow::Result<()> {
-        let path = std::path::Path::new(dir).join(file);
-        let mut f = std::io::BufWriter::new(
-            std::fs::File::create(&path).with_context(|| path.display().to_string())?,
-        );
-        writeln!(f, "{header}")?;
-        for t in 0..rec.u.len() {
-            let row: Vec<String> = cols.iter().map(|c| c[t].to_string()).collect();
-            writeln!(f, "{t},{}", row.join(","))?;
+    let time: Vec<f64> = (0..rec.u.len()).map(|t| t as f64).collect();
+    let write = |file: &str, cols: &[(&str, &[f64])]| -> anyhow::Result<()> {
+        let mut table = Table::new(time.clone());
+        for &(name, values) in cols {
+            table.push_column(name, values.to_vec())?;
         }
-        Ok(())
+        let path = std::path::Path::new(dir).join(file);
+        let f = std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+        table.write_csv(std::io::BufWriter::new(f)).with_context(|| format!("writing {}", path.display()))
     };
-    write("rec.csv", &[&rec.u, &rec.y], "time,u,y")?;
-    write("sim.csv", &[&rec.s], "time,y")?;
+    write("rec.csv", &[("u", &rec.u), ("y", &rec.y)])?;
+    write("sim.csv", &[("y", &rec.s)])?;
     eprintln!("{}: {}", case.name(), rec.description);
     Ok(())
 }

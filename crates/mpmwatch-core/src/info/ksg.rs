@@ -91,17 +91,19 @@ fn combine(n: usize, k_eff: &[usize], nx: &[usize], ny: &[usize]) -> f64 {
     digamma(n) + acc / n as f64
 }
 
-/// The joint neighbours of 2-D points on a grid of cells (a cell list): each query visits rings
-/// of cells around its own until the nearest edge of the rings visited lies at least as far as
-/// its k-th distance found (in the max norm, any point beyond that edge is at least that far).
-/// Where the points are dense that is one or two rings, a few dozen points, where a kd-tree
-/// descends and backtracks through nodes; sparse tails take more rings and stay exact.
 /// Most points one grid cell may hold, in multiples of the cells per axis (`√(2N)`): 256, an
-/// eighth of the points, at N = 2048. Independent normal data put at most about 2 in a cell, and a y that is
-/// an exact function of x puts about `√(N/2)` in a diagonal cell; a crowd beyond that is a
+/// eighth of the points, at N = 2048. Independent normal data put about 2 in a cell, and a y that
+/// is an exact function of x puts about `√(N/2)` in a diagonal cell; a crowd beyond that is a
 /// degenerate axis, which the kd-tree handles in O(N log N) where the grid would be O(N²).
 const CROWDED: usize = 4;
 
+/// The joint neighbours of 2-D points on a grid of cells (a cell list): each query visits rings
+/// of cells around its own until the nearest edge of the rings visited lies at least as far as
+/// its k-th distance found (in the max norm, any point beyond that edge is at least that far).
+/// Where the points are dense that is the block of a cell and its eight neighbours, a few dozen
+/// points, where a kd-tree descends and backtracks through nodes; sparse tails take more rings
+/// and stay exact. `None` when the points crowd a few cells or an axis has no width: the caller
+/// then uses the kd-tree.
 fn joint_neighbours_2d(
     x: &[f64],
     y: &[f64],

@@ -113,8 +113,7 @@ pub trait Element: Sync {
     /// (input elements), the reading of a true value `v` (output elements), the force for a
     /// motion `v` weighted by the fitted feedback coefficients `gamma` (feedback elements).
     /// `None`: no single-valued map of its own (backlash is a loop; a polynomial's map lives in
-    /// the numerators, [`Element::map_from_gains`]
-    /// the numerator coefficients).
+    /// the numerator coefficients, [`Element::map_from_gains`]).
     fn map_at(&self, _p: &[f64], _gamma: &[f64], _v: f64) -> Option<f64> {
         None
     }

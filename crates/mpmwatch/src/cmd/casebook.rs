@@ -40,7 +40,7 @@ pub struct Args {
     /// Instead of the casebook's 28 fixed cases, COUNT cases drawn by the wide generator: each
     /// with its own plant, PI tuning, disturbance spectrum, dither level, effect, channel, size
     /// and concealment ratio (0.1–0.8). Case k uses seed + k.
-    #[arg(long, value_name = "COUNT")]
+    #[arg(long, value_name = "COUNT", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     wide: Option<usize>,
 }
 
@@ -63,7 +63,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if args.wide.is_some() { " (wide generator: every plant, loop, disturbance and effect drawn)" } else { "" },
         args.n,
         args.seed,
-        args.seed + specs.len() as u64 - 1,
+        (args.seed + specs.len() as u64).saturating_sub(1),
         opts.surrogates,
         opts.seed,
         opts.lags.max
