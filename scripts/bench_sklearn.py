@@ -5,7 +5,8 @@ Times scikit-learn's own estimators, `_compute_mi_cd` (Ross 2014, discrete x: th
 case) and `_compute_mi_cc` (KSG algorithm 1), at N samples and k = 4, on data of the kind
 `mpmwatch bench` draws (a +-1 dither, an AR(1) residual with a = 0.7 plus 0.3 times the dither
 one sample earlier; a continuous AR(1) with a = 0.5), then runs `mpmwatch bench --json` on the
-same machine straight after and prints both medians and their ratios. Neither side's data is
+same machine straight after, alternating the two for a few rounds, and prints each round's
+medians and ratios and the median ratio. Neither side's data is
 the other's (different generators), only its kind and size; the estimators' cost depends on
 those, not on the draws.
 
@@ -50,6 +51,9 @@ def main():
     ap.add_argument("--n", type=int, default=2048)
     ap.add_argument("--reps", type=int, default=50)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--rounds", type=int, default=5,
+                    help="alternate the two sides this many times and report the median ratio (a shared "
+                         "machine's speed drifts between runs; each round times both sides within seconds)")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
     n, k = args.n, 4
@@ -57,16 +61,22 @@ def main():
     r = ar1(rng, n, 0.7)
     r[1:] += 0.3 * d[:-1]
     c = ar1(rng, n, 0.5)
-    sk_binary = median_ms(args.reps, lambda: _compute_mi_cd(r, d, k))
-    sk_cont = median_ms(args.reps, lambda: _compute_mi_cc(c, r, k))
-    out = subprocess.run([args.bin, "bench", "--n", str(n), "--reps", str(args.reps), "--seed", str(args.seed),
-                          "--json"], check=True, capture_output=True, text=True).stdout
-    ours = json.loads(out)
-    print(f"N = {n}, k = {k}, {args.reps} repetitions, medians; scikit-learn {sklearn.__version__}, numpy {np.__version__}")
-    print(f"{'estimate':<28}{'scikit-learn':>14}{'mpmwatch':>12}{'ratio':>9}")
-    for name, sk, us in [("binary dither (Ross)", sk_binary, ours["ksg_binary_ms"]),
-                         ("continuous (KSG1)", sk_cont, ours["ksg_continuous_ms"])]:
-        print(f"{name:<28}{sk:>11.3f} ms{us:>9.3f} ms{sk / us:>8.1f}x")
+    rows = []
+    for _ in range(args.rounds):
+        sk_binary = median_ms(args.reps, lambda: _compute_mi_cd(r, d, k))
+        sk_cont = median_ms(args.reps, lambda: _compute_mi_cc(c, r, k))
+        out = subprocess.run([args.bin, "bench", "--n", str(n), "--reps", str(args.reps), "--seed",
+                              str(args.seed), "--json"], check=True, capture_output=True, text=True).stdout
+        ours = json.loads(out)
+        rows.append((sk_binary, ours["ksg_binary_ms"], sk_cont, ours["ksg_continuous_ms"]))
+    print(f"N = {n}, k = {k}, {args.reps} repetitions, medians; scikit-learn {sklearn.__version__}, "
+          f"numpy {np.__version__}; {args.rounds} rounds")
+    print(f"{'round':<7}{'binary: sklearn':>16}{'mpmwatch':>10}{'ratio':>8}{'continuous: sklearn':>21}"
+          f"{'mpmwatch':>10}{'ratio':>8}")
+    for i, (sb, ub, sc, uc) in enumerate(rows, 1):
+        print(f"{i:<7}{sb:>13.3f} ms{ub:>7.3f} ms{sb / ub:>7.1f}x{sc:>18.3f} ms{uc:>7.3f} ms{sc / uc:>7.1f}x")
+    print(f"median ratio: binary dither (Ross) {statistics.median(a / b for a, b, _, _ in rows):.1f}x, "
+          f"continuous (KSG1) {statistics.median(a / b for _, _, a, b in rows):.1f}x")
 
 
 if __name__ == "__main__":

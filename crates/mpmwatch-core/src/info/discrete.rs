@@ -26,18 +26,23 @@ pub struct Levels {
 impl Levels {
     /// The levels of `x`, or `None` when it has more than `max_levels` distinct values.
     pub fn of(x: &[f64], max_levels: usize) -> Option<Self> {
+        // Levels compare by their bits (what `total_cmp` calls equal); a dither has few, so a
+        // linear scan finds a value's level faster than a search.
         let mut values: Vec<f64> = Vec::new();
         for &v in x {
-            if let Err(pos) = values.binary_search_by(|p| p.total_cmp(&v)) {
+            if !values.iter().any(|p| p.to_bits() == v.to_bits()) {
                 if values.len() == max_levels {
                     return None;
                 }
-                values.insert(pos, v);
+                values.push(v);
             }
         }
+        values.sort_unstable_by(f64::total_cmp);
         let labels = x
             .iter()
-            .map(|v| values.binary_search_by(|p| p.total_cmp(v)).expect("every value is a level") as u16)
+            .map(|v| {
+                values.iter().position(|p| p.to_bits() == v.to_bits()).expect("every value is a level") as u16
+            })
             .collect();
         Some(Self { values, labels })
     }
@@ -69,9 +74,7 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
         return ross_sorted(&ys, &ls, n_classes, k);
     }
     // Each class's samples, by their position in the whole sorted sample (a counting sort,
-    // so positions stay ascending within a class): the k-th in-class neighbour is found by
-    // walking the class's values, and the count within its radius by galloping from the
-    // sample's own position in the whole, where the count is small.
+    // so positions stay ascending within a class).
     let mut offset = vec![0usize; n_classes + 1];
     for c in 0..n_classes {
         offset[c + 1] = offset[c] + counts[c];
@@ -85,9 +88,18 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
         values[*slot] = v;
         *slot += 1;
     }
+    ross_classes(y_sorted, &values, &position, &offset, k)
+}
+
+/// The estimator's sum, given the whole sample sorted (`y_sorted`) and each class's slice
+/// `offset[c]..offset[c + 1]` of `values` (its samples, ascending) and of `position` (where each
+/// sits in `y_sorted`). Classes with fewer than two members must already be left out. The k-th
+/// in-class neighbour is found by walking the class's values, and the count within its radius
+/// by scanning (or galloping through) the whole between the class neighbours one further out.
+fn ross_classes(y_sorted: &[f64], values: &[f64], position: &[u32], offset: &[usize], k: usize) -> f64 {
     let mut acc = 0.0;
     let mut used = 0usize;
-    for c in 0..n_classes {
+    for c in 0..offset.len() - 1 {
         let range = offset[c]..offset[c + 1];
         let n_c = range.len();
         if n_c < 2 {
@@ -117,17 +129,70 @@ pub(crate) fn ross_sorted(y_sorted: &[f64], labels: &[u16], n_classes: usize, k:
 }
 
 /// Ross's estimator in nats for labelled X and continuous Y (inputs validated by the caller).
+///
+/// Each class is sorted on its own, on the integers whose order is `f64::total_cmp`'s (a sort
+/// of plain integers, the fastest the standard library has), and the classes are merged into
+/// the whole: the merge yields each class's positions in the whole directly.
 pub(crate) fn ross(levels: &Levels, y: &[f64], k: usize) -> f64 {
-    // Sorting the (value, label) pairs themselves compares in place, where sorting indices
-    // would fetch both values from elsewhere at every comparison.
-    // Each value is mapped once to the integer whose order is `f64::total_cmp`'s, so the sort
-    // compares integers instead of re-deriving that key at every comparison.
-    let mut pairs: Vec<(i64, u16)> =
-        y.iter().map(|&v| total_order(v.to_bits() as i64)).zip(levels.labels.iter().copied()).collect();
-    pairs.sort_unstable_by_key(|p| p.0);
-    let (y_sorted, labels): (Vec<f64>, Vec<u16>) =
-        pairs.into_iter().map(|(k, l)| (f64::from_bits(total_order(k) as u64), l)).unzip();
-    ross_sorted(&y_sorted, &labels, levels.count(), k)
+    let n_classes = levels.count();
+    let mut counts = vec![0usize; n_classes];
+    levels.labels.iter().for_each(|&l| counts[l as usize] += 1);
+    // Singleton classes have no in-class neighbour and leave the sample altogether.
+    let kept: Vec<usize> = (0..n_classes).filter(|&c| counts[c] > 1).collect();
+    let mut offset = vec![0usize; kept.len() + 1];
+    let mut slot_of = vec![usize::MAX; n_classes];
+    for (s, &c) in kept.iter().enumerate() {
+        offset[s + 1] = offset[s] + counts[c];
+        slot_of[c] = s;
+    }
+    let n = offset[kept.len()];
+    let mut keys = vec![0i64; n];
+    let mut fill = offset.clone();
+    for (&v, &l) in y.iter().zip(&levels.labels) {
+        let s = slot_of[l as usize];
+        if s != usize::MAX {
+            keys[fill[s]] = total_order(v.to_bits() as i64);
+            fill[s] += 1;
+        }
+    }
+    for s in 0..kept.len() {
+        keys[offset[s]..offset[s + 1]].sort_unstable();
+    }
+    let mut y_sorted = vec![0.0; n];
+    let mut position = vec![0u32; n];
+    let mut put = |p: usize, at: usize| {
+        y_sorted[p] = f64::from_bits(total_order(keys[at]) as u64);
+        position[at] = p as u32;
+    };
+    let mut head = offset.clone();
+    let mut p = 0;
+    if kept.len() == 2 {
+        // The binary dither's case, without a branch on the data while both classes last.
+        let (end_a, end_b) = (offset[1], offset[2]);
+        let (mut a, mut b) = (head[0], head[1]);
+        while a < end_a && b < end_b {
+            let take_a = keys[a] <= keys[b];
+            put(p, if take_a { a } else { b });
+            a += usize::from(take_a);
+            b += usize::from(!take_a);
+            p += 1;
+        }
+        (head[0], head[1]) = (a, b);
+    }
+    // At each step the smallest head among the classes (ties go to the lower class).
+    while p < n {
+        let mut best = usize::MAX;
+        for s in 0..kept.len() {
+            if head[s] < offset[s + 1] && (best == usize::MAX || keys[head[s]] < keys[head[best]]) {
+                best = s;
+            }
+        }
+        put(p, head[best]);
+        head[best] += 1;
+        p += 1;
+    }
+    let values: Vec<f64> = keys.into_iter().map(|key| f64::from_bits(total_order(key) as u64)).collect();
+    ross_classes(&y_sorted, &values, &position, &offset, k)
 }
 
 #[cfg(test)]

@@ -55,6 +55,7 @@ fn closed_loop_study() {
         }
         if verbose {
             for g in &d.report.findings {
+                eprintln!("    {}", g.summary);
                 for t in &g.tried {
                     eprintln!(
                         "    {}→{} tried {:<16} score−null {:>9.1} validation gain {:6.2}",
