@@ -232,6 +232,38 @@ mod tests {
         digamma(n) + acc / n as f64
     }
 
+    /// The merge of separately sorted classes against the whole sorted at once: three and five
+    /// levels, a singleton class (left out by both), ties in y across classes.
+    #[test]
+    fn merged_classes_equal_the_whole_sorted_at_once() {
+        let x: Vec<f64> = (0..500)
+            .map(|i| match (i * 37 + i / 7) % 5 {
+                0 | 1 => 1.0,
+                2 => -1.0,
+                3 => 0.5,
+                _ => 2.0,
+            })
+            .collect();
+        let mut with_singleton = x.clone();
+        with_singleton[17] = 9.0;
+        // Every other sample is a whole number whatever its class: ties within and across classes.
+        let y: Vec<f64> = (0..500)
+            .map(|i| (((i * 7919) % 613) as f64 / 20.0).floor() + if i % 2 == 0 { 0.1 * x[i] } else { 0.0 })
+            .collect();
+        for xs in [&x, &with_singleton] {
+            let levels = Levels::of(xs, 8).unwrap();
+            let mut order: Vec<usize> = (0..y.len()).collect();
+            order.sort_by(|&a, &b| y[a].total_cmp(&y[b]));
+            let ys: Vec<f64> = order.iter().map(|&i| y[i]).collect();
+            let ls: Vec<u16> = order.iter().map(|&i| levels.labels[i]).collect();
+            for k in [1, 3, 4, 8] {
+                let a = ross(&levels, &y, k);
+                let b = ross_sorted(&ys, &ls, levels.count(), k);
+                assert!((a - b).abs() < 1e-12, "k={k}: {a} vs {b}");
+            }
+        }
+    }
+
     #[test]
     fn sorted_version_equals_brute_force() {
         let x: Vec<f64> = (0..400).map(|i| if (i * 37 + i / 7) % 3 == 0 { 1.0 } else { -1.0 }).collect();
