@@ -232,7 +232,7 @@ mod tests {
         digamma(n) + acc / n as f64
     }
 
-    /// The merge of separately sorted classes against the whole sorted at once: three and five
+    /// The merge of separately sorted classes against the whole sorted at once: four and five
     /// levels, a singleton class (left out by both), ties in y across classes.
     #[test]
     fn merged_classes_equal_the_whole_sorted_at_once() {
