@@ -219,6 +219,9 @@ pub struct OutputCtx {
     pub ut: Vec<Vec<f64>>,
     /// The operating points.
     pub u0: Vec<f64>,
+    /// Per input, the range of `ut` over the training rows: the polynomial terms hold their
+    /// powers at its edges (see [`OutputCtx::columns`]).
+    pub u_range: Vec<(f64, f64)>,
     /// Recorded output.
     pub y: Vec<f64>,
     /// Nominal simulation of this output.
@@ -265,14 +268,18 @@ impl OutputCtx {
                 vec![g0(&u.iter().map(|v| v.clamp(*lo, *hi) - v).collect::<Vec<_>>())]
             }
             Term::SaturationOut { lo, hi } => vec![self.s.iter().map(|v| v.clamp(*lo, *hi) - v).collect()],
-            Term::Quadratic => {
-                vec![g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()), self.s_channel[i].clone()]
+            // A polynomial fitted on the training range is not known beyond it, and extrapolated
+            // it grows without bound: the powers hold their value at the range's edges (the
+            // linear part, the channel's own response, still follows the input).
+            Term::Quadratic | Term::Cubic => {
+                let (lo, hi) = self.u_range.get(i).copied().unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                let held: Vec<f64> = u.iter().map(|v| if lo <= hi { v.clamp(lo, hi) } else { *v }).collect();
+                let power = |k: i32| g0(&held.iter().map(|v| v.powi(k)).collect::<Vec<_>>());
+                let mut cols =
+                    if matches!(term, Term::Cubic) { vec![power(3), power(2)] } else { vec![power(2)] };
+                cols.push(self.s_channel[i].clone());
+                cols
             }
-            Term::Cubic => vec![
-                g0(&u.iter().map(|v| v * v * v).collect::<Vec<_>>()),
-                g0(&u.iter().map(|v| v * v).collect::<Vec<_>>()),
-                self.s_channel[i].clone(),
-            ],
             Term::CubicOut => vec![g0(&self.y.iter().map(|v| (v - self.y0).powi(3)).collect::<Vec<_>>())],
             Term::Bilinear(pairs) => pairs
                 .iter()

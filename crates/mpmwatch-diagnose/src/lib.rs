@@ -561,10 +561,21 @@ pub(crate) fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> O
     let ut: Vec<Vec<f64>> = u.iter().zip(&u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
     let has_channel: Vec<bool> = (0..u.len()).map(|i| model.has_channel(i, u[i], s)).collect();
     let s_channel: Vec<Vec<f64>> = (0..u.len()).map(|i| model.channel(i, &ut[i])).collect();
+    let u_range = ut
+        .iter()
+        .map(|x| {
+            let train = &x[split.train.clone()];
+            (
+                train.iter().copied().fold(f64::INFINITY, f64::min),
+                train.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        })
+        .collect();
     OutputCtx {
         y0: median(&s[split.train.clone()]),
         ut,
         u0,
+        u_range,
         y: y.to_vec(),
         s: s.to_vec(),
         model,

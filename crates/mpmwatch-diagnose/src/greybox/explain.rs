@@ -209,9 +209,9 @@ fn nominal_orders(nominal: &NominalArx, inputs: usize) -> Orders {
 
 /// Free parameters of an element on the linear orders.
 fn complexity(el: &dyn Element, d: &Data<'_>, i: usize, orders: &Orders) -> usize {
-    let p = el.starts(d, i).first().map_or(0, Vec::len);
-    let signals = el.signals(&vec![0.0; p], &d.u, i).len();
-    p + orders.na + signals * orders.nb + el.feedbacks() + 1
+    let p = el.starts(d, i).into_iter().next().unwrap_or_default();
+    let signals = el.signals(&p, &d.u, i).len();
+    p.len().saturating_sub(el.fixed()) + orders.na + signals * orders.nb + el.feedbacks() + 1
 }
 
 /// Response of input `i` through the linear part of a fitted linear structure to a unit step

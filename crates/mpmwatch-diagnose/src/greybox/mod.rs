@@ -81,6 +81,12 @@ pub trait Element: Sync {
     /// Starting values of the element's own parameters (empty vector: it has none), acting on
     /// input `i`.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>>;
+    /// How many leading parameters of every start are set from the training rows and kept as
+    /// they are by the fit (a polynomial's centre and scale): not free, so not counted in the
+    /// element's complexity either. 0 by default.
+    fn fixed(&self) -> usize {
+        0
+    }
     /// The signals the linear dynamics see, each with its own numerator: by default the inputs.
     /// `i` is the input the element acts on.
     fn signals(&self, _p: &[f64], u: &[&[f64]], _i: usize) -> Vec<Vec<f64>> {
@@ -118,11 +124,11 @@ pub trait Element: Sync {
         None
     }
     /// The static map at `v` for an element whose map lives in the numerators (a polynomial):
-    /// `dc[s]` is the steady-state gain of signal `s` of [`Element::signals`], `u` the input
-    /// the element acts on as the fit saw it. A map and a linear gain are only determined
+    /// `dc[s]` is the steady-state gain of signal `s` of [`Element::signals`], `p` the fitted
+    /// parameters, `i` the input the element acts on. A map and a linear gain are only determined
     /// together, up to a scale and an offset, so the map is drawn with unit slope at the
     /// input's mean (where it meets the identity the nominal assumes). `None` by default.
-    fn map_from_gains(&self, _dc: &[f64], _u: &[f64], _i: usize, _v: f64) -> Option<f64> {
+    fn map_from_gains(&self, _p: &[f64], _dc: &[f64], _i: usize, _v: f64) -> Option<f64> {
         None
     }
     /// What [`Element::map_at`] maps: the argument's name and range, and the value's name.
@@ -176,7 +182,7 @@ impl Model<'_> {
                 let v = lo - pad + (hi - lo + 2.0 * pad) * k as f64 / 200.0;
                 self.element
                     .map_at(&f.p, gamma, v)
-                    .or_else(|| self.element.map_from_gains(&dc, d.u[self.input], self.input, v))
+                    .or_else(|| self.element.map_from_gains(&f.p, &dc, self.input, v))
                     .map(|m| (v, m))
             })
             .collect::<Option<Vec<_>>>()?;
@@ -342,12 +348,16 @@ impl Model<'_> {
     }
 }
 
-/// The simulation-error problem handed to Levenberg–Marquardt: parameters `[p, θ]`.
+/// The simulation-error problem handed to Levenberg–Marquardt: parameters `[p, θ]` without
+/// the element's fixed ones ([`Element::fixed`]).
 struct SimError<'a, 'e> {
     model: &'a Model<'e>,
     u: &'a [&'a [f64]],
     y: &'a [f64],
     rows: &'a [usize],
+    /// The element's fixed leading parameters.
+    fixed: Vec<f64>,
+    /// Its free ones, the first `n_p` of `x`.
     n_p: usize,
     x: DVector<f64>,
     /// The residual of a diverging simulation: large, finite, so the step is rejected.
@@ -356,7 +366,8 @@ struct SimError<'a, 'e> {
 
 impl SimError<'_, '_> {
     fn fitted(&self, x: &DVector<f64>) -> Fitted {
-        Fitted { p: x.as_slice()[..self.n_p].to_vec(), theta: x.as_slice()[self.n_p..].to_vec() }
+        let p = self.fixed.iter().chain(&x.as_slice()[..self.n_p]).copied().collect();
+        Fitted { p, theta: x.as_slice()[self.n_p..].to_vec() }
     }
 
     fn residual_at(&self, x: &DVector<f64>) -> DVector<f64> {
@@ -425,9 +436,11 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
     for (p, target) in tries {
         let Some(start) = model.equation_error(&p, &d.u, &target, rows) else { continue };
         let mut candidates = vec![start.clone()];
-        let n_p = p.len();
-        let x0 = DVector::from_iterator(n_p + start.theta.len(), p.iter().chain(&start.theta).copied());
-        let problem = SimError { model, u: &d.u, y: d.y, rows, n_p, x: x0, blowup: 1e3 * scale };
+        let (fixed, free) = p.split_at(model.element.fixed().min(p.len()));
+        let n_p = free.len();
+        let x0 = DVector::from_iterator(n_p + start.theta.len(), free.iter().chain(&start.theta).copied());
+        let problem =
+            SimError { model, u: &d.u, y: d.y, rows, fixed: fixed.to_vec(), n_p, x: x0, blowup: 1e3 * scale };
         // A simulation that diverges from the equation-error start has nothing to refine.
         if sse(&start).is_some() {
             let (solved, _) = LevenbergMarquardt::new().with_patience(30).minimize(problem);
@@ -595,13 +608,44 @@ mod tests {
             let truth = |v: f64| (w_of(v) - w_of(m)) / slope + m;
             let span = curve.points.iter().map(|p| truth(p.0)).fold(f64::NEG_INFINITY, f64::max)
                 - curve.points.iter().map(|p| truth(p.0)).fold(f64::INFINITY, f64::min);
-            for &(v, got) in &curve.points {
+            // The map is the fitted one over the training range; beyond it the powers hold.
+            let (lo, hi) = (d.u_quantile(0, 0.0), d.u_quantile(0, 1.0));
+            for &(v, got) in curve.points.iter().filter(|p| (lo..=hi).contains(&p.0)) {
                 assert!(
                     (got - truth(v)).abs() < 1e-3 * span,
                     "degree {degree}, {v}: {got} against {}",
                     truth(v)
                 );
             }
+        }
+    }
+
+    /// A fitted polynomial keeps the centre and scale of its training rows: simulating the first
+    /// half of the record alone gives the first half of the whole record's simulation (the
+    /// simulation is causal, so only the arithmetic's rounding may differ, 1e-9 of the output's
+    /// range), and the centre is the training rows' mean, not the record's. Centred on the
+    /// record it is given, the same coefficients would act on other powers.
+    #[test]
+    fn a_fitted_polynomial_means_the_same_map_on_any_record() {
+        let u: Vec<f64> =
+            (0..1200).map(|t| ((t / 13 * 7919) % 41) as f64 / 20.0 - 0.7 + t as f64 / 1200.0).collect();
+        let mut y = vec![0.0; u.len()];
+        for t in 2..u.len() {
+            y[t] = 0.8 * y[t - 1] + 0.5 * (u[t - 2] + 0.4 * u[t - 2].powi(2));
+        }
+        let d = Data { u: vec![&u], y: &y, train: 0..800, nominal: None };
+        let el = polynomial::Polynomial { degree: 2 };
+        let model = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2] } };
+        let rows: Vec<usize> = (10..800).collect();
+        let f = fit(&model, &d, &rows).unwrap();
+        let train_mean = u[..800].iter().sum::<f64>() / 800.0;
+        assert_eq!(f.p[0], train_mean);
+        let whole = model.simulate(&f, &[&u], &y).unwrap();
+        let half = model.simulate(&f, &[&u[..600]], &y[..600]).unwrap();
+        let range = y.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+            - y.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        for t in 0..600 {
+            assert!((whole[t] - half[t]).abs() <= 1e-9 * range, "{t}: {} against {}", whole[t], half[t]);
         }
     }
 

@@ -7,18 +7,35 @@ use super::{Data, Element};
 use crate::candidates::{ActsOn, Physics};
 
 /// The input and its powers up to `degree` about the input's mean, each through its own
-/// numerator. No parameters of its own: the map is linear in its coefficients.
+/// numerator, the powers scaled by the input's standard deviation. Its parameters, that mean and
+/// standard deviation and the input's range, are taken on the training rows and kept by the fit
+/// ([`Element::fixed`]): the same fitted coefficients then mean the same map on any record, and
+/// the held-out tail does not shape the regressors. Beyond the training range the powers hold
+/// their value at its edge: a polynomial fitted on a range is not known outside it, and
+/// extrapolated it grows without bound, while the input's own (linear) path still follows.
+/// The map is linear in its coefficients.
 pub struct Polynomial {
     /// 2 (quadratic) or 3 (cubic).
     pub degree: i32,
 }
 
-/// The input's mean and standard deviation, about which its powers are taken.
-fn centre_and_scale(x: &[f64]) -> (f64, f64) {
+/// The parameters `[mean, sd, min, max]` of `x`.
+fn centring_of(x: &[f64]) -> Vec<f64> {
     let n = x.len().max(1) as f64;
     let m = x.iter().sum::<f64>() / n;
     let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt().max(1e-12);
-    (m, sd)
+    let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    vec![m, sd, lo, hi]
+}
+
+/// The standardised value whose power the dynamics see for an input `v`, under `p`.
+fn standardised(p: &[f64], v: f64) -> f64 {
+    let (m, sd) = (p.first().copied().unwrap_or(0.0), p.get(1).copied().unwrap_or(1.0).max(1e-12));
+    let (lo, hi) =
+        (p.get(2).copied().unwrap_or(f64::NEG_INFINITY), p.get(3).copied().unwrap_or(f64::INFINITY));
+    let v = if lo <= hi { v.clamp(lo, hi) } else { v };
+    (v - m) / sd
 }
 
 impl Element for Polynomial {
@@ -28,29 +45,30 @@ impl Element for Polynomial {
     fn acts_on(&self) -> ActsOn {
         ActsOn::Input
     }
-    fn starts(&self, _d: &Data<'_>, _i: usize) -> Vec<Vec<f64>> {
-        vec![Vec::new()]
+    fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
+        vec![centring_of(&d.u[i][d.train.clone()])]
     }
-    fn signals(&self, _p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
+    fn fixed(&self) -> usize {
+        4
+    }
+    fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         let x = u[i];
-        let (m, sd) = centre_and_scale(x);
         let mut out: Vec<Vec<f64>> = u.iter().map(|x| x.to_vec()).collect();
         for k in 2..=self.degree {
-            out.push(x.iter().map(|v| ((v - m) / sd).powi(k)).collect());
+            out.push(x.iter().map(|&v| standardised(p, v).powi(k)).collect());
         }
         out
     }
     /// What the dynamics see of an input `v`, in the input's units: `v` plus each power's
     /// steady-state contribution over the input's own gain (`None` when that gain is zero).
-    fn map_from_gains(&self, dc: &[f64], u: &[f64], i: usize, v: f64) -> Option<f64> {
+    fn map_from_gains(&self, p: &[f64], dc: &[f64], i: usize, v: f64) -> Option<f64> {
         let powers = (self.degree - 1) as usize;
         let first = dc.len().checked_sub(powers)?;
-        let gain = dc[i];
+        let gain = *dc.get(i)?;
         if gain.abs() < 1e-12 || !gain.is_finite() {
             return None;
         }
-        let (m, sd) = centre_and_scale(u);
-        let z = (v - m) / sd;
+        let z = standardised(p, v);
         Some(v + (2..=self.degree).zip(&dc[first..]).map(|(k, g)| g / gain * z.powi(k)).sum::<f64>())
     }
     fn describe(&self, _p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
@@ -61,5 +79,26 @@ impl Element for Polynomial {
             ),
             BTreeMap::new(),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Inside the training range the powers are those of the standardised input; beyond it
+    /// they hold their value at the edge, while the input itself passes unchanged.
+    #[test]
+    fn powers_hold_beyond_the_training_range() {
+        let train = [-1.0, 0.0, 1.0, 2.0];
+        let p = centring_of(&train);
+        assert_eq!(p, vec![0.5, 1.25f64.sqrt(), -1.0, 2.0]);
+        let el = Polynomial { degree: 3 };
+        let u = [0.5, 2.0, 5.0, -4.0];
+        let sig = el.signals(&p, &[&u], 0);
+        assert_eq!(sig[0], u.to_vec());
+        let z = |v: f64| (v - 0.5) / 1.25f64.sqrt();
+        assert_eq!(sig[1], vec![0.0, z(2.0).powi(2), z(2.0).powi(2), z(-1.0).powi(2)]);
+        assert_eq!(sig[2], vec![0.0, z(2.0).powi(3), z(2.0).powi(3), z(-1.0).powi(3)]);
     }
 }
