@@ -430,6 +430,47 @@ fn first_order(b: Vec<f64>, pole: f64, x: &[f64]) -> Vec<f64> {
 mod tests {
     use super::*;
 
+    /// The polynomial terms hold their powers beyond the training range: a record whose tail
+    /// leaves that range gives the same power columns as the record with its tail held at the
+    /// range's edges (same arithmetic, so 1e-12), while the linear column still follows the
+    /// input.
+    #[test]
+    fn polynomial_columns_hold_beyond_the_training_range() {
+        let n = 600;
+        let u: Vec<f64> =
+            (0..n).map(|t| ((t / 7 * 7919) % 23) as f64 / 10.0 + if t >= 400 { 3.0 } else { 0.0 }).collect();
+        let mut s = vec![0.0; n];
+        for t in 1..n {
+            s[t] = 0.8 * s[t - 1] + 0.5 * u[t - 1];
+        }
+        let split = crate::select::Split {
+            features: None,
+            fit: 20..280,
+            train: 20..400,
+            folds: Vec::new(),
+            closed_loop: false,
+        };
+        let (lo, hi) =
+            u[20..400].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let held: Vec<f64> =
+            u.iter().enumerate().map(|(t, &v)| if t >= 400 { v.clamp(lo, hi) } else { v }).collect();
+        let ctx = crate::output_ctx(&[&u], &s, &s, &split);
+        let ctx_held = crate::output_ctx(&[&held], &s, &s, &split);
+        for term in [Term::Quadratic, Term::Cubic] {
+            let (a, b) = (ctx.columns(0, &term), ctx_held.columns(0, &term));
+            let powers = a.len() - 1;
+            for k in 0..powers {
+                let worst = a[k].iter().zip(&b[k]).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(worst < 1e-12, "{term:?} column {k}: {worst}");
+            }
+            let linear_gap = a[powers][450] - b[powers][450];
+            assert!(
+                linear_gap.abs() > 1.0,
+                "{term:?}: the linear column should follow the input ({linear_gap})"
+            );
+        }
+    }
+
     #[test]
     fn play_holds_inside_the_gap() {
         let p = play(&[0.0, 0.4, 1.0, 0.8, 0.2, -1.0], 1.0);

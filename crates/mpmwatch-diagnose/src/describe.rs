@@ -99,23 +99,23 @@ pub fn describe(
             }
             format!("{output} cannot go {} while the model's can (an overflow or clip)", parts.join(" or "))
         }
-        Term::Quadratic => {
-            let c = u0 - f.coefs.get(1).copied().unwrap_or(0.0) / (2.0 * th);
+        Term::Quadratic | Term::Cubic => {
+            let (lo, hi) = ctx.u_range.get(i).map_or((f64::NAN, f64::NAN), |&(a, b)| (u0 + a, u0 + b));
             p.insert("coefficient".into(), th);
+            p.insert("fitted_range_low".into(), lo);
+            p.insert("fitted_range_high".into(), hi);
+            let (what, c) = if matches!(f.term, Term::Quadratic) {
+                ("square", u0 - f.coefs.get(1).copied().unwrap_or(0.0) / (2.0 * th))
+            } else {
+                ("cube", u0)
+            };
             p.insert("centre".into(), c);
+            let power = if what == "square" { "²" } else { "³" };
             format!(
-                "{output} responds to the square of {input}'s move: an extra {:.3}·({input} − {})² through the channel's dynamics",
-                th,
-                fmt(c)
-            )
-        }
-        Term::Cubic => {
-            p.insert("coefficient".into(), th);
-            p.insert("centre".into(), u0);
-            format!(
-                "{output} responds to the cube of {input}'s move: an extra {:.3}·({input} − {})³ through the channel's dynamics",
-                th,
-                fmt(u0)
+                "{output} responds to the {what} of {input}'s move: an extra {th:.3}·({input} − {}){power} through the channel's dynamics, fitted for {input} in [{}, {}] and held at that range's edges beyond it",
+                fmt(c),
+                fmt(lo),
+                fmt(hi)
             )
         }
         Term::CubicOut => {

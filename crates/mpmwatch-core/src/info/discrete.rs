@@ -232,8 +232,8 @@ mod tests {
         digamma(n) + acc / n as f64
     }
 
-    /// The merge of separately sorted classes against the whole sorted at once: four and five
-    /// levels, a singleton class (left out by both), ties in y across classes.
+    /// The merge of separately sorted classes against the whole sorted at once: two, four and
+    /// five levels, a singleton class (left out by both), ties in y within and across classes.
     #[test]
     fn merged_classes_equal_the_whole_sorted_at_once() {
         let x: Vec<f64> = (0..500)
@@ -246,11 +246,15 @@ mod tests {
             .collect();
         let mut with_singleton = x.clone();
         with_singleton[17] = 9.0;
+        // Two classes (the branch-free merge), alone and with a singleton left out.
+        let binary: Vec<f64> = x.iter().map(|&v| if v > 0.75 { 1.0 } else { -1.0 }).collect();
+        let mut binary_with_singleton = binary.clone();
+        binary_with_singleton[3] = 0.0;
         // Every other sample is a whole number whatever its class: ties within and across classes.
         let y: Vec<f64> = (0..500)
             .map(|i| (((i * 7919) % 613) as f64 / 20.0).floor() + if i % 2 == 0 { 0.1 * x[i] } else { 0.0 })
             .collect();
-        for xs in [&x, &with_singleton] {
+        for xs in [&x, &with_singleton, &binary, &binary_with_singleton] {
             let levels = Levels::of(xs, 8).unwrap();
             let mut order: Vec<usize> = (0..y.len()).collect();
             order.sort_by(|&a, &b| y[a].total_cmp(&y[b]));

@@ -82,8 +82,8 @@ pub trait Element: Sync {
     /// input `i`.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>>;
     /// How many leading parameters of every start are set from the training rows and kept as
-    /// they are by the fit (a polynomial's centre and scale): not free, so not counted in the
-    /// element's complexity either. 0 by default.
+    /// they are by the fit (a polynomial's centre, scale and range): not free, so not counted
+    /// in the element's complexity either. 0 by default.
     fn fixed(&self) -> usize {
         0
     }

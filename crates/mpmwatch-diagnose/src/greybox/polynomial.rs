@@ -71,13 +71,14 @@ impl Element for Polynomial {
         let z = standardised(p, v);
         Some(v + (2..=self.degree).zip(&dc[first..]).map(|(k, g)| g / gain * z.powi(k)).sum::<f64>())
     }
-    fn describe(&self, _p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
+    fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let what = if self.degree == 2 { "square" } else { "cube" };
+        let (lo, hi) = (p.get(2).copied().unwrap_or(f64::NAN), p.get(3).copied().unwrap_or(f64::NAN));
         (
             format!(
-                "{output} responds to the {what} of {input}'s deviation, not only to {input} (a static polynomial map on the input)"
+                "{output} responds to the {what} of {input}'s deviation, not only to {input} (a static polynomial map on the input, fitted for {input} in [{lo:.4}, {hi:.4}] and held at that range's edges beyond it)"
             ),
-            BTreeMap::new(),
+            BTreeMap::from([("fitted_range_low".to_string(), lo), ("fitted_range_high".to_string(), hi)]),
         )
     }
 }
