@@ -38,6 +38,9 @@ impl Element for Backlash {
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         map_input(u, i, |x| play(x, p[0]))
     }
+    fn trace(&self, p: &[f64], sweep: &[f64]) -> Option<Vec<f64>> {
+        Some(play(sweep, p[0]))
+    }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!("{input} reaches {output} through play of width {:.3} (backlash)", p[0].abs()),

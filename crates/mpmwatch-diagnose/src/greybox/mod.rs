@@ -131,6 +131,11 @@ pub trait Element: Sync {
     fn map_from_gains(&self, _p: &[f64], _dc: &[f64], _i: usize, _v: f64) -> Option<f64> {
         None
     }
+    /// For an element with memory, which has no single-valued map: what the dynamics see of an
+    /// input that follows `sweep`, for its figure (backlash draws its loop). `None` by default.
+    fn trace(&self, _p: &[f64], _sweep: &[f64]) -> Option<Vec<f64>> {
+        None
+    }
     /// What [`Element::map_at`] maps: the argument's name and range, and the value's name.
     fn map_axes(&self, d: &Data<'_>, i: usize, input: &str, output: &str) -> (String, (f64, f64), String) {
         match self.acts_on() {
@@ -148,7 +153,8 @@ pub trait Element: Sync {
     }
 }
 
-/// A fitted element drawn as what it is: its static map over the range the record visits.
+/// A fitted element drawn as what it is: its static map over the range the record visits, or
+/// the loop an element with memory traces over that range.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ElementCurve {
     /// The element's class.
@@ -157,7 +163,8 @@ pub struct ElementCurve {
     pub x_label: String,
     /// Name of its value.
     pub y_label: String,
-    /// The map, 201 points over the range.
+    /// The map, 201 points over the range; for an element with memory, its loop (401 points,
+    /// down the range and up again).
     pub points: Vec<(f64, f64)>,
     /// What the nominal assumes in its place: the identity for a map on a signal, no force
     /// for a feedback element.
@@ -165,13 +172,29 @@ pub struct ElementCurve {
 }
 
 impl Model<'_> {
-    /// The fitted element's map ([`Element::map_at`]) over its range, `None` when it has none.
+    /// The fitted element's map ([`Element::map_at`], [`Element::map_from_gains`]) or loop
+    /// ([`Element::trace`]) over its range, `None` when it has none.
     pub fn curve(&self, f: &Fitted, d: &Data<'_>, input: &str, output: &str) -> Option<ElementCurve> {
         let sig = self.element.signals(&f.p, &d.u, self.input).len();
         let g0 = self.orders.na + sig * self.orders.nb;
         let gamma = &f.theta[g0..g0 + self.element.feedbacks()];
         let (x_label, (lo, hi), y_label) = self.element.map_axes(d, self.input, input, output);
         let pad = 0.1 * (hi - lo).max(1e-12);
+        let at = |k: usize| lo - pad + (hi - lo + 2.0 * pad) * k as f64 / 200.0;
+        // An element with memory is driven up, down and up again over the range; the last two
+        // legs, which start from a state the first leg has set, close its loop.
+        let sweep: Vec<f64> = (0..=200).chain((0..200).rev()).chain(1..=200).map(at).collect();
+        if let Some(out) = self.element.trace(&f.p, &sweep) {
+            let points: Vec<(f64, f64)> = sweep.iter().copied().zip(out).skip(200).collect();
+            let baseline = points.iter().map(|&(v, _)| (v, v)).collect();
+            return Some(ElementCurve {
+                physics: self.element.physics(),
+                x_label,
+                y_label,
+                points,
+                baseline,
+            });
+        }
         // Steady-state gain of each signal's numerator through the poles.
         let (na, nb) = (self.orders.na, self.orders.nb);
         let poles = 1.0 - f.theta[..na].iter().sum::<f64>();
@@ -179,7 +202,7 @@ impl Model<'_> {
             (0..sig).map(|s| f.theta[na + s * nb..na + (s + 1) * nb].iter().sum::<f64>() / poles).collect();
         let points = (0..=200)
             .map(|k| {
-                let v = lo - pad + (hi - lo + 2.0 * pad) * k as f64 / 200.0;
+                let v = at(k);
                 self.element
                     .map_at(&f.p, gamma, v)
                     .or_else(|| self.element.map_from_gains(&f.p, &dc, self.input, v))
@@ -579,6 +602,31 @@ mod tests {
             let truth = v.signum() * (v.abs() - 0.3).max(0.0);
             assert!((w - truth).abs() < 2e-3, "{v}: {w} against {truth}");
         }
+        assert!(c.baseline.iter().all(|&(v, b)| v == b));
+    }
+
+    /// Backlash of width 0.4 is drawn as its loop: coming down the range the actuator sits
+    /// half the width above the command, going up half below (the play operator's closed
+    /// form, away from the turning points where it crosses the gap), and the loop closes.
+    #[test]
+    fn backlash_is_drawn_as_its_loop() {
+        let u: Vec<f64> = (0..400).map(|t| ((t / 9 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
+        let d = Data { u: vec![&u], y: &u, train: 0..400, nominal: None };
+        let el = backlash::Backlash;
+        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+        let f = Fitted { p: vec![0.4], theta: vec![0.8, 0.5, 0.0] };
+        let c = m.curve(&f, &d, "u", "y").expect("backlash has a loop");
+        assert_eq!(c.points.len(), 401);
+        let (top, bottom) = (c.points[0].0, c.points[200].0);
+        assert!(top > 1.0 && bottom < -1.0, "{top} {bottom}");
+        for (k, &(v, w)) in c.points.iter().enumerate() {
+            let away = (v - bottom).min(top - v) > 0.4 + 1e-9;
+            if away {
+                let expected = if k <= 200 { v + 0.2 } else { v - 0.2 };
+                assert!((w - expected).abs() < 1e-12, "{k}: {v} -> {w}, not {expected}");
+            }
+        }
+        assert!((c.points[0].1 - c.points[400].1).abs() < 1e-12);
         assert!(c.baseline.iter().all(|&(v, b)| v == b));
     }
 
