@@ -104,13 +104,12 @@ pub fn describe(
             p.insert("coefficient".into(), th);
             p.insert("fitted_range_low".into(), lo);
             p.insert("fitted_range_high".into(), hi);
-            let (what, c) = if matches!(f.term, Term::Quadratic) {
-                ("square", u0 - f.coefs.get(1).copied().unwrap_or(0.0) / (2.0 * th))
+            let (what, power, c) = if matches!(f.term, Term::Quadratic) {
+                ("square", "²", u0 - f.coefs.get(1).copied().unwrap_or(0.0) / (2.0 * th))
             } else {
-                ("cube", u0)
+                ("cube", "³", u0)
             };
             p.insert("centre".into(), c);
-            let power = if what == "square" { "²" } else { "³" };
             format!(
                 "{output} responds to the {what} of {input}'s move: an extra {th:.3}·({input} − {}){power} through the channel's dynamics, fitted for {input} in [{}, {}] and held at that range's edges beyond it",
                 fmt(c),
