@@ -102,8 +102,8 @@ const CROWDED: usize = 4;
 /// its k-th distance found (in the max norm, any point beyond that edge is at least that far).
 /// Where the points are dense that is the block of a cell and its eight neighbours, a few dozen
 /// points, where a kd-tree descends and backtracks through nodes; sparse tails take more rings
-/// and stay exact. `None` when the points crowd a few cells or an axis has no width: the caller
-/// then uses the kd-tree.
+/// and stay exact. `None` when the points crowd a few cells or an axis has no width, or k is
+/// above 16: the caller then uses the kd-tree.
 fn joint_neighbours_2d(
     x: &[f64],
     y: &[f64],
@@ -111,6 +111,26 @@ fn joint_neighbours_2d(
     my: &SortedMarginal,
     k: usize,
 ) -> Option<JointNeighbours> {
+    // The k best distances live in a fixed-size array, so that the compiler unrolls the
+    // insertion that every candidate point goes through.
+    macro_rules! dispatch {
+        ($($k:literal)*) => {
+            match k {
+                $($k => grid_neighbours::<$k>(x, y, mx, my),)*
+                _ => None,
+            }
+        };
+    }
+    dispatch!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+fn grid_neighbours<const K: usize>(
+    x: &[f64],
+    y: &[f64],
+    mx: &SortedMarginal,
+    my: &SortedMarginal,
+) -> Option<JointNeighbours> {
+    let k = K;
     let n = x.len();
     // Interior cells of equal width between each axis' 0.5 % and 99.5 % quantiles, `√(2N)` of
     // them per axis, and one open cell at each end for the outliers: square cells when both
@@ -176,7 +196,7 @@ fn joint_neighbours_2d(
 
     let mut radius = vec![0.0; n];
     let mut k_eff = vec![k; n];
-    let mut best = vec![f64::INFINITY; k];
+    let mut best = [f64::INFINITY; K];
     // The points of a cell and its eight neighbours, gathered once for every point of the cell.
     let (mut bx, mut by, mut bid) = (Vec::new(), Vec::new(), Vec::new());
     for b in 0..g {
@@ -201,27 +221,30 @@ fn joint_neighbours_2d(
                 let i = i as usize;
                 best.fill(f64::INFINITY);
                 for t in 0..bx.len() {
-                    let d = (bx[t] - px).abs().max((by[t] - py).abs());
+                    // Plain comparisons rather than `f64::min`/`max`: the values are finite, and
+                    // the NaN rule those carry costs a branch in the innermost loop.
+                    let (ex, ey) = ((bx[t] - px).abs(), (by[t] - py).abs());
+                    let d = if ex > ey { ex } else { ey };
                     // Branch-free: itself counts as infinitely far, and d bubbles into place.
                     let mut v = if bid[t] as usize == i { f64::INFINITY } else { d };
                     for slot in best.iter_mut() {
-                        let lo = slot.min(v);
-                        v = slot.max(v);
-                        *slot = lo;
+                        let s = *slot;
+                        *slot = if v < s { v } else { s };
+                        v = if v < s { s } else { v };
                     }
                 }
                 // The rare query the block does not settle continues ring by ring (r ≥ 2).
                 let span = |row: usize, c0: usize, c1: usize, best: &mut [f64]| {
                     let (from, to) = (start[row * g + c0] as usize, start[row * g + c1 + 1] as usize);
-                    for &(qx, qy, j) in &members[from..to] {
-                        let d = (qx - px).abs().max((qy - py).abs());
-                        if d < best[k - 1] && j as usize != i {
-                            let mut at = k - 1;
-                            while at > 0 && best[at - 1] > d {
-                                best[at] = best[at - 1];
-                                at -= 1;
-                            }
-                            best[at] = d;
+                    // A ring never holds the query point itself, so no self test; the same
+                    // branch-free bubble as the block.
+                    for &(qx, qy, _) in &members[from..to] {
+                        let (ex, ey) = ((qx - px).abs(), (qy - py).abs());
+                        let mut v = if ex > ey { ex } else { ey };
+                        for slot in best.iter_mut() {
+                            let s = *slot;
+                            *slot = if v < s { v } else { s };
+                            v = if v < s { s } else { v };
                         }
                     }
                 };
