@@ -137,12 +137,12 @@ pub fn explain(
             && let Some(sim) = m.simulate(&f, &d.u, d.y)
         {
             let i = flagged.first().copied().unwrap_or(0);
-            let (physics, summary, parameters) = linear_change(nominal, &f, orders, i, ts, names);
+            let (physics, summary, parameters, curve) = linear_change(nominal, &f, orders, i, ts, names);
             tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v - nominal_cv });
             return Explanation {
                 finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
                 corrected: Some(sim),
-                curve: None,
+                curve: Some(curve),
             };
         }
     }
@@ -244,9 +244,34 @@ fn rise(step: &[f64]) -> (usize, f64) {
     (start, (t63.saturating_sub(start) as f64).max(0.5))
 }
 
+/// The two step responses of a linear change, drawn from the step until both have had five of
+/// their time constants after their dead time (at least 20 samples), in seconds.
+fn step_curve(
+    physics: Physics,
+    s_new: &[f64],
+    s_old: &[f64],
+    settle: usize,
+    ts: f64,
+    names: &Names<'_>,
+    i: usize,
+) -> super::ElementCurve {
+    let end = settle.clamp(20, s_new.len());
+    let at = |s: &[f64]| -> Vec<(f64, f64)> { (0..end).map(|t| (t as f64 * ts, s[t])).collect() };
+    let (inp, out) = (names.inputs[i], names.output);
+    super::ElementCurve {
+        physics,
+        x_label: format!("time since a unit step of {inp} [s]"),
+        y_label: format!("{out}'s response"),
+        points: at(s_new),
+        baseline: at(s_old),
+        label: format!("re-fitted to the record ({})", physics.name()),
+        baseline_label: "the model".into(),
+    }
+}
+
 /// What a linear re-fit changes against the nominal, for input `i`: the dead time when the
 /// responses start at different samples, else the gain or the time constant, whichever moved
-/// most (as a log ratio).
+/// most (as a log ratio); with both step responses drawn.
 fn linear_change(
     nominal: &NominalArx,
     f: &Fitted,
@@ -254,7 +279,7 @@ fn linear_change(
     i: usize,
     ts: f64,
     names: &Names<'_>,
-) -> (Physics, String, BTreeMap<String, f64>) {
+) -> (Physics, String, BTreeMap<String, f64>, super::ElementCurve) {
     let n = 2000;
     let mut u = vec![1.0; n];
     u[0] = 0.0;
@@ -262,6 +287,25 @@ fn linear_change(
     let s_old = nominal.channel(i, &u);
     let (d_new, tau_new) = rise(&s_new);
     let (d_old, tau_old) = rise(&s_old);
+    let settle = |d: usize, tau: f64| d as f64 + 5.0 * tau;
+    let settle = settle(d_new, tau_new).max(settle(d_old, tau_old)).ceil() as usize + 1;
+    let (physics, summary, parameters) =
+        change(&s_new, &s_old, (d_new, tau_new), (d_old, tau_old), ts, names, i);
+    (physics, summary, parameters, step_curve(physics, &s_new, &s_old, settle, ts, names, i))
+}
+
+/// The change a linear re-fit names, from the two step responses and their (dead time, time
+/// constant) in samples.
+fn change(
+    s_new: &[f64],
+    s_old: &[f64],
+    (d_new, tau_new): (usize, f64),
+    (d_old, tau_old): (usize, f64),
+    ts: f64,
+    names: &Names<'_>,
+    i: usize,
+) -> (Physics, String, BTreeMap<String, f64>) {
+    let n = s_new.len();
     let (g_new, g_old) = (s_new[n - 1], s_old[n - 1]);
     let (inp, out) = (names.inputs[i], names.output);
     if d_new != d_old {
@@ -321,5 +365,43 @@ mod tests {
         // More than 3 poles or taps are capped; an all-zero numerator gives a tap at lag 0.
         let n = nominal(vec![1.0, -0.5, 0.1, 0.01, 0.001], vec![vec![0.1, 0.2, 0.3, 0.4, 0.5], vec![0.0; 5]]);
         assert_eq!(nominal_orders(&n, 2), Orders { na: 3, nb: 3, nk: vec![0, 0] });
+    }
+
+    /// A linear change is drawn as the two step responses: the model's (its own channel, as
+    /// the finding compares) and the re-fit's, long enough for both to settle.
+    #[test]
+    fn a_linear_change_draws_both_step_responses() {
+        // The model: y(t) = 0.8 y(t−1) + 0.2 u(t−1), unit gain, time constant about 4.5 samples.
+        let model = nominal(vec![1.0, -0.8], vec![vec![0.0, 0.2]]);
+        let names = Names { inputs: vec!["u"], output: "y" };
+        let ts = 0.5;
+        // Settled: within 2 % of the steady state (unit gain here). Five time constants leave
+        // e^−5 ≈ 0.7 %; the time constant is read off the response in whole samples, which at
+        // 4.5 samples can shorten the window to 20 samples after the move, 0.8^20 ≈ 1.2 %.
+        let settled = |c: &[(f64, f64)]| (c.last().unwrap().1 - 1.0).abs() < 0.02;
+        let first_move = |c: &[(f64, f64)]| c.iter().position(|p| p.1.abs() > 1e-9).unwrap();
+
+        // The record's plant answers three samples later.
+        let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0] };
+        let orders = Orders { na: 1, nb: 1, nk: vec![4] };
+        let (physics, _, parameters, c) = linear_change(&model, &late, &orders, 0, ts, &names);
+        assert_eq!(physics, Physics::DeadTime);
+        assert!((parameters["extra_dead_time_s"] - 3.0 * ts).abs() < 1e-12, "{parameters:?}");
+        assert_eq!(first_move(&c.points), first_move(&c.baseline) + 3);
+        assert!(settled(&c.points) && settled(&c.baseline), "the window ends before both settle");
+        let mut u = vec![1.0; c.baseline.len()];
+        u[0] = 0.0;
+        let own = model.channel(0, &u);
+        for (k, &(t, v)) in c.baseline.iter().enumerate() {
+            assert_eq!((t, v), (k as f64 * ts, own[k]), "the baseline is the model's own step response");
+        }
+
+        // Twice the gain, the same timing.
+        let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0] };
+        let orders = Orders { na: 1, nb: 1, nk: vec![1] };
+        let (physics, _, _, c) = linear_change(&model, &strong, &orders, 0, ts, &names);
+        assert_eq!(physics, Physics::Gain);
+        let (end_new, end_old) = (c.points.last().unwrap().1, c.baseline.last().unwrap().1);
+        assert!((end_new - 2.0).abs() < 0.04 && (end_old - 1.0).abs() < 0.02, "{end_new} {end_old}");
     }
 }

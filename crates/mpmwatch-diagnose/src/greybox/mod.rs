@@ -153,8 +153,9 @@ pub trait Element: Sync {
     }
 }
 
-/// A fitted element drawn as what it is: its static map over the range the record visits, or
-/// the loop an element with memory traces over that range.
+/// A fitted element drawn as what it is: its static map over the range the record visits, the
+/// loop an element with memory traces over that range, or, for a linear change, the channel's
+/// re-fitted step response beside the model's.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ElementCurve {
     /// The element's class.
@@ -167,8 +168,12 @@ pub struct ElementCurve {
     /// down the range and up again).
     pub points: Vec<(f64, f64)>,
     /// What the nominal assumes in its place: the identity for a map on a signal, no force
-    /// for a feedback element.
+    /// for a feedback element, the model's own step response for a linear change.
     pub baseline: Vec<(f64, f64)>,
+    /// Legend of `points`.
+    pub label: String,
+    /// Legend of `baseline`.
+    pub baseline_label: String,
 }
 
 impl Model<'_> {
@@ -187,13 +192,13 @@ impl Model<'_> {
         if let Some(out) = self.element.trace(&f.p, &sweep) {
             let points: Vec<(f64, f64)> = sweep.iter().copied().zip(out).skip(200).collect();
             let baseline = points.iter().map(|&(v, _)| (v, v)).collect();
-            return Some(ElementCurve {
-                physics: self.element.physics(),
+            return Some(ElementCurve::against_the_model(
+                self.element.physics(),
                 x_label,
                 y_label,
                 points,
                 baseline,
-            });
+            ));
         }
         // Steady-state gain of each signal's numerator through the poles.
         let (na, nb) = (self.orders.na, self.orders.nb);
@@ -211,7 +216,28 @@ impl Model<'_> {
             .collect::<Option<Vec<_>>>()?;
         let fed_back = self.element.feedbacks() > 0;
         let baseline = points.iter().map(|&(v, _)| (v, if fed_back { 0.0 } else { v })).collect();
-        Some(ElementCurve { physics: self.element.physics(), x_label, y_label, points, baseline })
+        Some(ElementCurve::against_the_model(self.element.physics(), x_label, y_label, points, baseline))
+    }
+}
+
+impl ElementCurve {
+    /// A fitted element's curve beside what the nominal assumes without it.
+    fn against_the_model(
+        physics: Physics,
+        x_label: String,
+        y_label: String,
+        points: Vec<(f64, f64)>,
+        baseline: Vec<(f64, f64)>,
+    ) -> Self {
+        Self {
+            physics,
+            x_label,
+            y_label,
+            points,
+            baseline,
+            label: format!("fitted {}", physics.name()),
+            baseline_label: "nominal (without it)".into(),
+        }
     }
 }
 

@@ -244,8 +244,8 @@ pub fn write_outputs(
     Ok(())
 }
 
-/// The named physics element drawn as what it is (`{name}.png`): its fitted map over the range
-/// the record visits, beside what the nominal assumes in its place (dashed).
+/// The named physics element drawn as what it is (`{name}.png`): its fitted map (or loop, or a
+/// linear change's step response), beside what the nominal assumes in its place (dashed).
 pub fn element_figure(
     dir: &Path,
     name: &str,
@@ -253,8 +253,8 @@ pub fn element_figure(
     c: &mpmwatch_diagnose::ElementCurve,
 ) -> anyhow::Result<()> {
     let series = [
-        XySeries::line("nominal (without it)", c.baseline.clone(), true, (120, 120, 120), 2),
-        XySeries::line(format!("fitted {}", c.physics.name()), c.points.clone(), false, (31, 119, 180), 3),
+        XySeries::line(c.baseline_label.clone(), c.baseline.clone(), true, (120, 120, 120), 2),
+        XySeries::line(c.label.clone(), c.points.clone(), false, (31, 119, 180), 3),
     ];
     write_xy_chart(dir, name, title, &c.x_label, &c.y_label, &series)?;
     Ok(())
