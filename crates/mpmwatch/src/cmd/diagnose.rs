@@ -48,7 +48,10 @@ pub struct Args {
     /// Largest lag of the MI profile.
     #[arg(long, default_value_t = 15)]
     tmax: usize,
-    /// Write a figure per output (recorded, simulated, corrected) into this folder.
+    /// Write figures into this folder: per output, recorded, simulated and corrected over a
+    /// window of the held-out tail; for a finding, the fitted element drawn as what it is (a
+    /// dead zone's or limit's map, backlash's loop, a linear change's step response beside the
+    /// model's).
     #[arg(long)]
     figures: Option<PathBuf>,
     /// How hypotheses are compared in a closed loop (with --excitations). `prediction`: one-step
