@@ -421,7 +421,8 @@ pub fn family_test_group(
     let observed_ccf_p: Vec<f64> =
         observed.iter().enumerate().map(|(g, o)| if exact_split { ccf_p(o, g) } else { 1.0 }).collect();
     // What the surrogates' maxima are compared with: the maximum over the same dimensions.
-    let observed_max: Vec<f64> = observed.iter().enumerate().map(|(g, o)| maximum((g, o.clone()))).collect();
+    let observed_max: Vec<f64> =
+        observed.iter().enumerate().map(|(g, o)| maximum((g, o.clone()))).collect();
     let argmax: Vec<(usize, f64)> = observed
         .iter()
         .enumerate()
