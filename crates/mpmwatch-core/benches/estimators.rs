@@ -3,31 +3,15 @@
 //!
 //! Run: `cargo bench --bench estimators`.
 
+mod common;
+
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use mpmwatch_core::info::{
     Iaaft, IaaftOptions, Lags, MiOptions, SurrogateOptions, lagged_test, mutual_information,
 };
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
-
-fn ar1(rng: &mut ChaCha8Rng, n: usize, a: f64) -> Vec<f64> {
-    let mut prev = 0.0;
-    (0..n)
-        .map(|_| {
-            let e: f64 = StandardNormal.sample(rng);
-            prev = a * prev + e;
-            prev
-        })
-        .collect()
-}
 
 fn estimators(c: &mut Criterion) {
-    let n = 2048;
-    let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let dither: Vec<f64> = (0..n).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect();
-    let residual = ar1(&mut rng, n, 0.7);
-    let continuous = ar1(&mut rng, n, 0.5);
+    let (dither, residual, continuous, mut rng) = common::estimator_data(2048);
     let opts = MiOptions::default();
     c.bench_function("ksg_binary_2048", |b| {
         b.iter(|| mutual_information(black_box(&dither), black_box(&residual), &opts).unwrap())

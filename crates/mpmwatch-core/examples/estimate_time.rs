@@ -1,35 +1,20 @@
 //! The time of one MI estimate at N = 2048, k = 4, as the minimum over 200 batches of 20
 //! estimates: on a shared VM whose speed moves from one second to the next, the minimum is the
 //! steadiest figure to compare two builds by (run both alternately; criterion's mean moves
-//! with the neighbours). The data are those of `benches/estimators.rs` (seed 1).
+//! with the neighbours). The data are the criterion bench's (`benches/common`, seed 1).
 //!
 //! Run: `cargo run --release -p mpmwatch-core --example estimate_time -- continuous|binary`.
+
+#[path = "../benches/common/mod.rs"]
+mod common;
 
 use std::time::Instant;
 
 use mpmwatch_core::info::{MiOptions, mutual_information};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
-
-fn ar1(rng: &mut ChaCha8Rng, n: usize, a: f64) -> Vec<f64> {
-    let mut prev = 0.0;
-    (0..n)
-        .map(|_| {
-            let e: f64 = StandardNormal.sample(rng);
-            prev = a * prev + e;
-            prev
-        })
-        .collect()
-}
 
 fn main() {
     let which = std::env::args().nth(1).unwrap_or_else(|| "continuous".into());
-    let n = 2048;
-    let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let dither: Vec<f64> = (0..n).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect();
-    let residual = ar1(&mut rng, n, 0.7);
-    let continuous = ar1(&mut rng, n, 0.5);
+    let (dither, residual, continuous, _) = common::estimator_data(2048);
     let x = match which.as_str() {
         "continuous" => &continuous,
         "binary" => &dither,
