@@ -23,8 +23,10 @@ pub struct Args {
     /// Surrogates per matrix element.
     #[arg(long, default_value_t = 100)]
     surrogates: usize,
-    /// Seeds per matched case for the false-alarm rate (claim 7; at least 50 for the claim).
-    #[arg(long, default_value_t = 50)]
+    /// Seeds per matched case for the false-alarm rate (claim 7; the claim asks for at least
+    /// 50). The default 150 gives 300 runs, enough that a rule at 4–5 % is not read as failing
+    /// by chance (with 100 runs its verdict is close to a coin flip).
+    #[arg(long, default_value_t = 150)]
     matched_seeds: usize,
     /// Monte Carlo runs per record length (claim 2).
     #[arg(long, default_value_t = 100)]

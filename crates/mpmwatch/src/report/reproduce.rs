@@ -137,7 +137,7 @@ pub struct ReproduceOptions {
     pub length_runs: usize,
     /// Seeds per excitation type (claim 3).
     pub excitation_seeds: usize,
-    /// Seeds per matched case (claim 7; at least 50).
+    /// Seeds per matched case (claim 7; at least 50; default 150, 300 runs in all).
     pub matched_seeds: usize,
     /// The family rule's false-alarm rate per element (claim 7 uses 0.05 / m instead).
     pub alpha: f64,
@@ -156,7 +156,7 @@ impl Default for ReproduceOptions {
             surrogates: 100,
             length_runs: 100,
             excitation_seeds: 10,
-            matched_seeds: 50,
+            matched_seeds: 150,
             alpha: MatrixOptions::default().alpha,
             reading: Reading::default_for(Method::Family),
             sweep: true,

@@ -92,7 +92,7 @@ fn claim6_disturbance_change_alone_is_silent() {
     assert!(c.holds, "{}", c.ours);
 }
 
-/// 300 matched runs (150 seeds of each case; the claim needs 50), each matrix tested at a
+/// 300 matched runs (the default 150 seeds of each case; the claim needs 50), each matrix tested at a
 /// matrix-wide 5 % (0.05/m per element). Whether the claim "holds" is the point estimate ≤ 5 %,
 /// which a valid 5 % test misses on about 4 runs in 10; what this test checks is the level: 25
 /// or more alarmed runs has probability 0.009 under Binomial(300, 0.05) and 0.86 under a doubled
@@ -100,8 +100,7 @@ fn claim6_disturbance_change_alone_is_silent() {
 /// 10, and did once (docs/detection.md, "Tried at stop 26").
 #[test]
 fn claim7_false_alarm_rate_over_three_hundred_runs() {
-    let opts = ReproduceOptions { matched_seeds: 150, ..opts() };
-    let (c, study) = claim_false_alarms(&opts, |_| {}).unwrap();
+    let (c, study) = claim_false_alarms(&opts(), |_| {}).unwrap();
     assert_eq!(study.iter().map(|s| s.1).sum::<usize>(), 300);
     let alarmed: usize = study.iter().map(|s| s.2).sum();
     assert!(alarmed <= 24, "{}", c.ours);
