@@ -14,8 +14,9 @@
 //! 1. **Calibration.** The first `calibration` surrogates give each MI statistic at each lag its
 //!    mean and standard deviation. They are then set aside: the observed maximum and the null
 //!    maxima below are standardised by the same fixed numbers, so they stay exchangeable. The
-//!    cross-correlation under circular shifts is standardised by its exact moments over every
-//!    admissible shift instead ([`LaggedPair::linear_shift_moments`]).
+//!    cross-correlation is standardised by its exact moments over every admissible circular
+//!    shift of the dither instead ([`LaggedPair::linear_shift_moments`]), whatever the MI
+//!    statistics' surrogates (circular shifts or iAAFT).
 //! 2. **Null maxima, sequentially** (Besag and Clifford 1991). Surrogates are drawn in batches;
 //!    once `exceedances` of their maxima reach the observed one the element is clearly null and
 //!    stops with `p = h / l` (h exceedances in l surrogates), a valid p-value.
@@ -27,8 +28,9 @@
 //!
 //! 4. **Shared surrogates.** Elements of one residual whose dithers are alike share one set
 //!    ([`family_test_group`]).
-//! 5. **The correlation against its exact null.** Under circular shifts the cross-correlation's
-//!    moments are exact, so its maximum over the lags needs no surrogates: it is tested by
+//! 5. **The correlation against its exact null.** Under circular shifts of the dither, binary or
+//!    continuous, the cross-correlation's moments are exact, so its maximum over the lags needs
+//!    no surrogates: it is tested by
 //!    Bonferroni at its share of the level, and the surrogates' maxima run over the MI
 //!    statistics only, at the rest. A maximum over both would take the correlation's critical
 //!    value from 50–100 noisy surrogate maxima, which cost the family about 9 points of power
@@ -178,11 +180,12 @@ pub struct FamilyTest {
     /// The standardised value a maximum must reach for `p = alpha` (the tail model's quantile);
     /// an MI statistic must reach it plus `mi_offset`.
     pub critical_z: f64,
-    /// The element's p-value. With circular-shift surrogates, `min(1, p_ccf / s, p_mi / (1 − s))`
+    /// The element's p-value, `min(1, p_ccf / s, p_mi / (1 − s))`
     /// with `s` the linear share: `p_ccf` the correlation's exact Bonferroni p-value over its
     /// lags, `p_mi` the surrogate p-value of the MI statistics' maximum; by the union bound
     /// `P(p ≤ alpha) ≤ s·alpha + (1 − s)·alpha` under the null, whatever the dependence between
-    /// the two. With iAAFT surrogates, the p-value of the one maximum over every statistic.
+    /// the two. For a dither periodic in every admissible shift (no exact moments), the
+    /// p-value of the one maximum over every statistic.
     pub p_value: f64,
     /// How the p-value was obtained.
     pub p_source: PValueSource,
@@ -363,12 +366,10 @@ pub fn family_test_group(
         };
         (m % g_count, s)
     };
-    // The cross-correlation's moments over all admissible shifts, exact, where the surrogates
-    // are circular shifts; each element's own, since they are exact for it.
-    let exact: Vec<Option<Vec<(f64, f64)>>> = generators
-        .iter()
-        .map(|g| if g.iaaft.is_none() { g.element.0.linear_shift_moments(g.bounds) } else { None })
-        .collect();
+    // The cross-correlation's moments over all admissible shifts, exact; each element's own,
+    // since they are exact for it.
+    let exact: Vec<Option<Vec<(f64, f64)>>> =
+        generators.iter().map(|g| g.element.0.linear_shift_moments(g.bounds)).collect();
 
     let observed: Vec<Vec<f64>> = elements.iter().map(|&(p, j)| statistics(p, j, None, 0)).collect();
     let calibration_count = opts.calibration;
@@ -391,7 +392,8 @@ pub fn family_test_group(
     // Where every element's correlation has exact moments (circular shifts), the correlation is
     // tested against its exact null and the surrogates' maxima run over the MI statistics only
     // (`exact_split`); the element's p-value joins the two by the union bound, see
-    // [`FamilyTest::p_value`]. Otherwise (iAAFT) one maximum runs over everything.
+    // [`FamilyTest::p_value`]. Otherwise (a dither whose every shift reproduces it) one
+    // maximum runs over everything.
     let exact_split = exact.iter().all(Option::is_some);
     let share = opts.linear_share;
     let offset = if exact_split { 0.0 } else { mi_offset(opts.alpha, share, n_lags, ccf_from) };

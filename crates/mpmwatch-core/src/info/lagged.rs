@@ -290,17 +290,20 @@ impl<'a> LaggedPair<'a> {
     }
 
     /// Per lag, the exact mean and standard deviation of [`Self::linear_profile_shifted`] over
-    /// every shift in `bounds` that [`super::draw_shift`] may return, on the discrete path
-    /// (`None` on the continuous one, or when no shift is admissible). See
+    /// every shift in `bounds` that [`super::draw_shift`] may return (`None` when no shift is
+    /// admissible). On the continuous path too: whatever the surrogates of the MI statistics,
+    /// the correlation's null given the residual is its distribution over the dither's circular
+    /// shifts, and every shift in the bounds changes a continuous series. See
     /// [`super::shift_moments`].
     pub fn linear_shift_moments(&self, bounds: (usize, usize)) -> Option<Vec<(f64, f64)>> {
-        let Path::Discrete { levels, .. } = &self.path else {
-            return None;
+        let labels = match &self.path {
+            Path::Discrete { levels, .. } => Some(&levels.labels[..]),
+            Path::Continuous => None,
         };
         super::shift_moments::ccf_shift_moments(
             self.x,
             &self.y,
-            &levels.labels,
+            labels,
             &self.times(),
             self.lags.iter(),
             self.moments,

@@ -20,13 +20,14 @@ use rustfft::num_complex::Complex64;
 
 /// Per lag, the mean and standard deviation of the cross-correlation over the admissible shifts
 /// in `bounds` (inclusive). `labels` are x's discrete levels (the shifts that leave more than 90 %
-/// of them unchanged are not admissible), `times` the used times, `moments` the (mean, spread)
+/// of them unchanged are not admissible), `None` for a continuous x (every shift in the bounds
+/// is admissible: no shift reproduces a continuous series), `times` the used times, `moments` the (mean, spread)
 /// of x and of y that the statistic is normalised by. Returns `None` when no shift is admissible
 /// (a dither periodic in every shift), in which case the caller keeps sampled moments.
 pub(crate) fn ccf_shift_moments(
     x: &[f64],
     y: &[f64],
-    labels: &[u16],
+    labels: Option<&[u16]>,
     times: &[usize],
     lags: impl Iterator<Item = usize>,
     moments: [(f64, f64); 2],
@@ -38,6 +39,7 @@ pub(crate) fn ccf_shift_moments(
     let inverse = planner.plan_fft_inverse(n);
     let spectrum = |v: &mut Vec<Complex64>| forward.process(v);
     // Unchanged samples per shift: Σ over levels of each indicator's circular autocorrelation.
+    let labels = labels.unwrap_or_default();
     let levels = labels.iter().copied().max().map_or(0, |m| m as usize + 1);
     let mut same = vec![0.0; n];
     for level in 0..levels {
@@ -84,18 +86,31 @@ mod tests {
     use crate::info::significance::stream;
     use rand::Rng;
 
+    /// A binary dither (its levels given) and a continuous one (none: every shift in the
+    /// bounds is admissible), each against the statistic computed at every admissible shift.
     #[test]
     fn moments_equal_those_of_every_shift_computed_directly() {
+        for continuous in [false, true] {
+            check_against_direct(continuous);
+        }
+    }
+
+    fn check_against_direct(continuous: bool) {
         let n = 257;
         let mut rng = stream(5, 0);
         let labels: Vec<u16> = (0..n).map(|_| u16::from(rng.random::<bool>())).collect();
-        let x: Vec<f64> = labels.iter().map(|&l| if l == 1 { 0.5 } else { -0.5 }).collect();
+        let x: Vec<f64> = if continuous {
+            (0..n).map(|_| rng.random::<f64>() - 0.5).collect()
+        } else {
+            labels.iter().map(|&l| if l == 1 { 0.5 } else { -0.5 }).collect()
+        };
         let y: Vec<f64> = (0..n).map(|_| rng.random::<f64>()).collect();
         let times: Vec<usize> = (0..n - 6).filter(|t| t % 7 != 3).collect();
         let stats = |v: &[f64]| (crate::numerics::mean(v), crate::numerics::std_dev(v, 0));
         let moments = [stats(&x), stats(&y)];
         let bounds = (30, 220);
-        let got = ccf_shift_moments(&x, &y, &labels, &times, 1..=5, moments, bounds).unwrap();
+        let levels = (!continuous).then_some(&labels[..]);
+        let got = ccf_shift_moments(&x, &y, levels, &times, 1..=5, moments, bounds).unwrap();
         for (k, tau) in (1..=5).enumerate() {
             let values: Vec<f64> = (bounds.0..=bounds.1)
                 .filter(|&s| (0..n).filter(|&t| x[(t + s) % n] == x[t]).count() * 10 < n * 9)
@@ -124,7 +139,8 @@ mod tests {
         let y: Vec<f64> = (0..n).map(|t| (t as f64).sin()).collect();
         let times: Vec<usize> = (0..n - 3).collect();
         assert!(
-            ccf_shift_moments(&x, &y, &labels, &times, 1..=3, [(0.5, 0.5), (0.0, 1.0)], (10, 10)).is_none()
+            ccf_shift_moments(&x, &y, Some(&labels), &times, 1..=3, [(0.5, 0.5), (0.0, 1.0)], (10, 10))
+                .is_none()
         );
     }
 }
