@@ -627,12 +627,21 @@ mod tests {
     #[test]
     fn the_correlation_p_value_is_bonferroni_over_its_exact_moments() {
         let n = 1024;
-        let d = prbs(5, n);
-        let e = noise(5, n);
+        let mut rng = stream(5, 3);
+        let uniform: Vec<f64> = (0..n).map(|_| (rng.random::<f64>() * 2.0 - 1.0) * 3f64.sqrt()).collect();
+        // A binary dither (circular-shift surrogates) and a continuous one (iAAFT surrogates for
+        // the MI statistics; the correlation's null is the same circular-shift one).
+        for d in [prbs(5, n), uniform] {
+            check_correlation_p_value(&d, &noise(5, n));
+        }
+    }
+
+    fn check_correlation_p_value(d: &[f64], e: &[f64]) {
+        let n = d.len();
         let y: Vec<f64> = (0..n).map(|t| e[t] + if t >= 4 { 0.13 * d[t - 4] } else { 0.0 }).collect();
         let lags = Lags::new(1, 10).unwrap();
         let mi = MiOptions::default();
-        let pair = LaggedPair::new(&d, &y, lags, 1, &mi).unwrap();
+        let pair = LaggedPair::new(d, &y, lags, 1, &mi).unwrap();
         let o = opts(6);
         let t = family_test(&pair, None, &o).unwrap();
         assert_eq!(t.p_source, PValueSource::ExactCorrelation, "p = {}", t.p_value);
