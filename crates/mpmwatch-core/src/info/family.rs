@@ -30,11 +30,12 @@
 //!    ([`family_test_group`]).
 //! 5. **The correlation against its exact null.** Under circular shifts of the dither, binary or
 //!    continuous, the cross-correlation's moments are exact, so its maximum over the lags needs
-//!    no surrogates: it is tested by
-//!    Bonferroni at its share of the level, and the surrogates' maxima run over the MI
-//!    statistics only, at the rest. A maximum over both would take the correlation's critical
-//!    value from 50–100 noisy surrogate maxima, which cost the family about 9 points of power
-//!    against a plain CCF on linear effects spread over lags (docs/detection.md).
+//!    no surrogates: it is tested by Bonferroni at its share of the level, and the surrogates'
+//!    maxima run over the MI statistics only, at the rest. A maximum over both would take the
+//!    correlation's critical value from 50–100 noisy surrogate maxima, which cost the family
+//!    about 9 points of power against a plain CCF on linear effects spread over lags; ranking
+//!    it among every admissible shift instead of the normal tail is not valid
+//!    (docs/detection.md, "Stop 26 reverted it").
 //!
 //! Edge cases, named: a (statistic, lag) whose surrogate spread is zero carries no evidence and
 //! is left out of the maximum; the cross-correlation enters by its absolute standardised value
