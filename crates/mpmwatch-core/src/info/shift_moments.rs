@@ -13,7 +13,10 @@
 //! and `b = x − x̄`, the sum is the circular cross-correlation `(a_τ ⋆ b)(s)`, the inverse FFT of
 //! `conj(A_τ)·B`. The admissible shifts are those [`super::draw_shift`] accepts: inside the
 //! bounds and changing more than a tenth of the samples, whose count of unchanged samples is the
-//! circular autocorrelation of each level's indicator.
+//! circular autocorrelation of each level's indicator (every shift in the bounds, for a
+//! continuous dither). The family test uses these moments for continuous dithers too, whose MI
+//! statistics have iAAFT surrogates: given the residual, the correlation's null is still its
+//! distribution over the dither's circular shifts.
 
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64;
@@ -21,8 +24,8 @@ use rustfft::num_complex::Complex64;
 /// Per lag, the mean and standard deviation of the cross-correlation over the admissible shifts
 /// in `bounds` (inclusive). `labels` are x's discrete levels (the shifts that leave more than 90 %
 /// of them unchanged are not admissible), `None` for a continuous x (every shift in the bounds
-/// is admissible: no shift reproduces a continuous series), `times` the used times, `moments` the (mean, spread)
-/// of x and of y that the statistic is normalised by. Returns `None` when no shift is admissible
+/// is admissible: no shift reproduces a continuous series), `times` the used times, `moments`
+/// the (mean, spread) of x and of y that the statistic is normalised by. Returns `None` when no shift is admissible
 /// (a dither periodic in every shift), in which case the caller keeps sampled moments.
 pub(crate) fn ccf_shift_moments(
     x: &[f64],

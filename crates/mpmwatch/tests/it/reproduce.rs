@@ -92,12 +92,12 @@ fn claim6_disturbance_change_alone_is_silent() {
     assert!(c.holds, "{}", c.ours);
 }
 
-/// 300 matched runs (the default 150 seeds of each case; the claim needs 50), each matrix tested at a
-/// matrix-wide 5 % (0.05/m per element). Whether the claim "holds" is the point estimate ≤ 5 %,
-/// which a valid 5 % test misses on about 4 runs in 10; what this test checks is the level: 25
-/// or more alarmed runs has probability 0.009 under Binomial(300, 0.05) and 0.86 under a doubled
-/// rate, Binomial(300, 0.10). With 100 runs and a bound of 11 a doubled rate passed 7 times in
-/// 10, and did once (docs/detection.md, "Tried at stop 26").
+/// 300 matched runs (the default 150 seeds of each case; the claim needs 50), each matrix tested
+/// at a matrix-wide 5 % (0.05/m per element). Whether the claim "holds" is the point estimate
+/// ≤ 5 %, which a valid 5 % test misses on about 4 runs in 10; what this test checks is the
+/// level: 25 or more alarmed runs has probability 0.009 under Binomial(300, 0.05) and 0.86 under
+/// a doubled rate, Binomial(300, 0.10). With 100 runs and a bound of 11 a doubled rate would
+/// pass 7 times in 10 (docs/detection.md, "Stop 26 reverted it").
 #[test]
 fn claim7_false_alarm_rate_over_three_hundred_runs() {
     let (c, study) = claim_false_alarms(&opts(), |_| {}).unwrap();
