@@ -33,8 +33,7 @@ mod structure;
 
 use std::collections::BTreeMap;
 
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use crate::minimize::minimize;
 
 use super::candidates::{ActsOn, Physics};
 use super::fitness::fit_pct;
@@ -397,69 +396,6 @@ impl Model<'_> {
     }
 }
 
-/// The simulation-error problem handed to Levenberg–Marquardt: parameters `[p, θ]` without
-/// the element's fixed ones ([`Element::fixed`]).
-struct SimError<'a, 'e> {
-    model: &'a Model<'e>,
-    u: &'a [&'a [f64]],
-    y: &'a [f64],
-    rows: &'a [usize],
-    /// The element's fixed leading parameters.
-    fixed: Vec<f64>,
-    /// Its free ones, the first `n_p` of `x`.
-    n_p: usize,
-    x: DVector<f64>,
-    /// The residual of a diverging simulation: large, finite, so the step is rejected.
-    blowup: f64,
-}
-
-impl SimError<'_, '_> {
-    fn fitted(&self, x: &DVector<f64>) -> Fitted {
-        let p = self.fixed.iter().chain(&x.as_slice()[..self.n_p]).copied().collect();
-        Fitted { p, theta: x.as_slice()[self.n_p..].to_vec() }
-    }
-
-    fn residual_at(&self, x: &DVector<f64>) -> DVector<f64> {
-        match self.model.simulate(&self.fitted(x), self.u, self.y) {
-            Some(s) => DVector::from_iterator(self.rows.len(), self.rows.iter().map(|&t| s[t] - self.y[t])),
-            None => DVector::from_element(self.rows.len(), self.blowup),
-        }
-    }
-}
-
-impl LeastSquaresProblem<f64, Dyn, Dyn> for SimError<'_, '_> {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, Dyn>;
-    type ParameterStorage = Owned<f64, Dyn>;
-
-    fn set_params(&mut self, x: &DVector<f64>) {
-        self.x.copy_from(x);
-    }
-
-    fn params(&self) -> DVector<f64> {
-        self.x.clone()
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        Some(self.residual_at(&self.x))
-    }
-
-    /// Forward differences, one simulation per parameter (the crate's own numerical
-    /// derivative re-simulates once per residual, which is quadratic in the record's length).
-    fn jacobian(&self) -> Option<DMatrix<f64>> {
-        let r0 = self.residual_at(&self.x);
-        let mut j = DMatrix::zeros(r0.len(), self.x.len());
-        for k in 0..self.x.len() {
-            let mut x = self.x.clone();
-            let h = 1e-6 * self.x[k].abs().max(1e-3);
-            x[k] += h;
-            let r = self.residual_at(&x);
-            j.set_column(k, &((r - &r0) / h));
-        }
-        Some(j)
-    }
-}
-
 /// Fits a model on `rows` by simulation error: the equation-error start at each of the
 /// element's starting values, refined by Levenberg–Marquardt; the fit with the least
 /// simulation error on `rows` wins. `None` when no start gives a stable simulation.
@@ -487,13 +423,19 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
         let mut candidates = vec![start.clone()];
         let (fixed, free) = p.split_at(model.element.fixed().min(p.len()));
         let n_p = free.len();
-        let x0 = DVector::from_iterator(n_p + start.theta.len(), free.iter().chain(&start.theta).copied());
-        let problem =
-            SimError { model, u: &d.u, y: d.y, rows, fixed: fixed.to_vec(), n_p, x: x0, blowup: 1e3 * scale };
+        // The element's fixed leading parameters stay; the free ones and θ are searched.
+        let fitted = |x: &[f64]| Fitted {
+            p: fixed.iter().chain(&x[..n_p]).copied().collect(),
+            theta: x[n_p..].to_vec(),
+        };
+        let residual = |x: &[f64]| -> Option<Vec<f64>> {
+            let s = model.simulate(&fitted(x), &d.u, d.y)?;
+            Some(rows.iter().map(|&t| s[t] - d.y[t]).collect())
+        };
+        let x0: Vec<f64> = free.iter().chain(&start.theta).copied().collect();
         // A simulation that diverges from the equation-error start has nothing to refine.
         if sse(&start).is_some() {
-            let (solved, _) = LevenbergMarquardt::new().with_patience(30).minimize(problem);
-            candidates.push(solved.fitted(&solved.x));
+            candidates.push(fitted(&minimize(&residual, &x0, rows.len(), 1e3 * scale)));
         }
         for c in candidates {
             if let Some(e) = sse(&c)

@@ -23,10 +23,11 @@ fn silverbox_with_the_cubic_spring_on_the_arrow_head() {
     );
 }
 
-/// The goal of 0.25 V is not reached (docs/diagnose.md, "Benchmark accuracy"), so the test holds
-/// the model to what it must do at least: the overflow and the sensor's top cut the nominal's
-/// test RMSE by a third (no better than the nominal on the test split would mean the named
-/// physics does not carry out of sample).
+/// The named physics alone (the upper tank's overflow and the sensor's top) must cut the
+/// nominal's test RMSE by a third (no better than the nominal on the test split would mean it
+/// does not carry out of sample); with the refinements chosen on the estimation record
+/// (`scripts/tanks_structure.py`: fitted outflow exponents, the lower tank overflowing at the
+/// sensor's top) the goal, ≤ 0.25 V on the validation record, must hold.
 #[test]
 fn cascaded_tanks_with_the_overflow_on_the_validation_record() {
     let cols =
@@ -44,4 +45,5 @@ fn cascaded_tanks_with_the_overflow_on_the_validation_record() {
         rows[1].rmse,
         rows[0].rmse
     );
+    assert!(rows[2].rmse <= 0.25, "refined: {:.3} V", rows[2].rmse);
 }
