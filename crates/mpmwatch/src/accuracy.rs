@@ -26,6 +26,9 @@ pub struct AccuracyRow {
     pub split: &'static str,
     /// What the literature is reported to reach on the same split (quoted, not re-derived).
     pub published: &'static str,
+    /// The model's simulation of the test split (the scored samples), for a figure.
+    #[serde(skip)]
+    pub test_simulation: Vec<f64>,
 }
 
 fn rmse(y: &[f64], s: &[f64], skip: usize) -> (f64, f64) {
@@ -83,6 +86,7 @@ pub fn silverbox(v1: &[f64], v2: &[f64]) -> Result<Vec<AccuracyRow>, DiagnoseErr
             nrmse_pct,
             split: "estimation 40 000..127 000 (multisines), test 100..40 000 (arrow head)",
             published,
+            test_simulation: s[100..].to_vec(),
         });
     }
     Ok(rows)
@@ -140,6 +144,7 @@ pub fn cascaded_tanks(
             nrmse_pct,
             split,
             published,
+            test_simulation: s.to_vec(),
         }
     };
     let on_both =

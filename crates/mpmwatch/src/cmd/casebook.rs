@@ -206,7 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             }
         }
-        md.push_str(&benchmark_accuracy(&args.data, &mut accuracy));
+        md.push_str(&benchmark_accuracy(&args.data, &fig, &mut accuracy));
         md.push_str("\nData: Silverbox and cascaded tanks from the nonlinear system-identification benchmarks (Wigren & Schoukens; Schoukens, Mattsson, Wigren & Noël 2016, CC BY-SA 4.0), coupled electric drives (Wigren & Schoukens, Uppsala University 2017), TCLab (BSD-3).\n");
     }
     std::fs::write(args.out.join("casebook.md"), md)?;
@@ -219,7 +219,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// The named physics on the benchmarks' own splits ([`mpmwatch::accuracy`]), as a markdown
 /// section; the rows go into `json` too.
-fn benchmark_accuracy(data: &Path, json: &mut Vec<mpmwatch::accuracy::AccuracyRow>) -> String {
+fn benchmark_accuracy(
+    data: &Path,
+    figures: &Path,
+    json: &mut Vec<mpmwatch::accuracy::AccuracyRow>,
+) -> String {
     eprintln!("benchmark accuracy: silverbox, cascaded tanks");
     let mut md = String::from(
         "\n## Benchmark accuracy on the benchmarks' own splits\n\n| benchmark | model | test RMSE | NRMSE (RMSE / std of the test output) | estimation RMSE (in sample) | split | published |\n| --- | --- | --- | --- | --- | --- | --- |\n",
@@ -231,12 +235,10 @@ fn benchmark_accuracy(data: &Path, json: &mut Vec<mpmwatch::accuracy::AccuracyRo
         let p = data.join("cascaded_tanks/dataBenchmark.csv");
         let (h, c) = read_plain(&p)?;
         let col = |n| column(&h, &c, n, &p);
-        rows.extend(mpmwatch::accuracy::cascaded_tanks(
-            &col("uEst")?,
-            &col("yEst")?,
-            &col("uVal")?,
-            &col("yVal")?,
-        )?);
+        let yv = col("yVal")?;
+        let tanks = mpmwatch::accuracy::cascaded_tanks(&col("uEst")?, &col("yEst")?, &col("uVal")?, &yv)?;
+        tanks_figure(figures, &yv, &tanks)?;
+        rows.extend(tanks);
         Ok(rows)
     })();
     match rows {
@@ -259,7 +261,42 @@ fn benchmark_accuracy(data: &Path, json: &mut Vec<mpmwatch::accuracy::AccuracyRo
         }
         Err(e) => md.push_str(&format!("| – | error: {e:#} | – | – | – | – | – |\n")),
     }
+    md.push_str("\n![cascaded tanks, validation record](figures/accuracy_cascaded_tanks.png)\n");
     md
+}
+
+/// The cascaded tanks' validation record against every model of the accuracy table, in volts
+/// against time: the recorded level black, the nominal dashed grey, the named overflow blue,
+/// with the refinements red.
+fn tanks_figure(dir: &Path, y: &[f64], rows: &[mpmwatch::accuracy::AccuracyRow]) -> anyhow::Result<()> {
+    use mpmwatch::report::figures::{XySeries, write_xy_chart};
+    let at = |s: &[f64]| -> Vec<(f64, f64)> {
+        s.iter().enumerate().map(|(k, &v)| (k as f64 * mpmwatch::tanks::BENCHMARK_TS, v)).collect()
+    };
+    let mut series = vec![XySeries::line("recorded", at(y), false, (0, 0, 0), 2)];
+    let styles = [
+        ("nominal (Torricelli)", true, (150, 150, 150)),
+        ("+ overflow (named)", false, (31, 119, 180)),
+        ("+ exponents, lower overflow", false, (214, 39, 40)),
+    ];
+    for (row, (label, dashed, colour)) in rows.iter().zip(styles) {
+        series.push(XySeries::line(
+            format!("{label}: {:.3} V", row.rmse),
+            at(&row.test_simulation),
+            dashed,
+            colour,
+            1,
+        ));
+    }
+    write_xy_chart(
+        dir,
+        "accuracy_cascaded_tanks",
+        "Cascaded tanks, validation record (uVal/yVal)",
+        "time, s",
+        "level, V",
+        &series,
+    )?;
+    Ok(())
 }
 
 /// The held-out tail of one simulated case: its last 200 samples (at most the tail) of output

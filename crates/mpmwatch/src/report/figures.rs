@@ -424,11 +424,33 @@ fn draw_xy<DB: DrawingBackend>(
     }
     chart
         .configure_series_labels()
+        .position(emptiest_corner(series, (x0, x1), (y0, y1)))
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .label_font((FONT, 12))
         .draw()?;
     Ok(())
+}
+
+/// The corner of the plot whose box (45 % of the width, 35 % of the height) holds the fewest
+/// points, for the legend: a fixed corner hides the data of every chart whose lines run
+/// through it. Ties go to the upper right.
+fn emptiest_corner(series: &[XySeries], (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> SeriesLabelPosition {
+    let (w, h) = (0.45 * (x1 - x0), 0.35 * (y1 - y0));
+    let corners = [
+        (SeriesLabelPosition::UpperRight, x1 - w..=x1, y1 - h..=y1),
+        (SeriesLabelPosition::UpperLeft, x0..=x0 + w, y1 - h..=y1),
+        (SeriesLabelPosition::LowerRight, x1 - w..=x1, y0..=y0 + h),
+        (SeriesLabelPosition::LowerLeft, x0..=x0 + w, y0..=y0 + h),
+    ];
+    let inside = |xs: &std::ops::RangeInclusive<f64>, ys: &std::ops::RangeInclusive<f64>| {
+        series.iter().flat_map(|s| &s.points).filter(|p| xs.contains(&p.0) && ys.contains(&p.1)).count()
+    };
+    corners
+        .into_iter()
+        .map(|(pos, xs, ys)| (inside(&xs, &ys), pos))
+        .min_by_key(|(n, _)| *n)
+        .map_or(SeriesLabelPosition::UpperRight, |(_, pos)| pos)
 }
 
 /// One item of a before → after chart: a label, the value before and after, and whether the
@@ -531,5 +553,23 @@ mod before_after_tests {
         assert!(svg.contains("c02") && svg.contains("held-out FIT"), "labels missing from the SVG");
         assert!(std::fs::metadata(&files[1]).unwrap().len() > 1000, "PNG suspiciously small");
         std::fs::remove_dir_all(&dir).ok();
+    }
+}
+
+#[cfg(test)]
+mod legend_tests {
+    use super::*;
+
+    /// A line rising from the lower left to the upper right leaves the other two corners empty;
+    /// of those, the upper left comes first. A line along the top leaves both lower corners.
+    #[test]
+    fn the_legend_goes_where_the_lines_are_not() {
+        let rising =
+            XySeries::line("a", (0..=10).map(|k| (k as f64, k as f64)).collect(), false, (0, 0, 0), 1);
+        let pos = emptiest_corner(&[rising], (0.0, 10.0), (0.0, 10.0));
+        assert!(matches!(pos, SeriesLabelPosition::UpperLeft), "{pos:?}");
+        let top = XySeries::line("b", (0..=10).map(|k| (k as f64, 9.5)).collect(), false, (0, 0, 0), 1);
+        let pos = emptiest_corner(&[top], (0.0, 10.0), (0.0, 10.0));
+        assert!(matches!(pos, SeriesLabelPosition::LowerRight), "{pos:?}");
     }
 }
