@@ -85,15 +85,22 @@ mod tests {
     }
 
     /// A region where the model cannot be evaluated is stepped around, not into: an exponential
-    /// decay fitted with its rate kept positive by refusing negative rates.
+    /// decay fitted with its rate kept positive by refusing negative rates, from a start (rate
+    /// 3 against 0.05) whose first steps land on negative rates.
     #[test]
     fn steps_around_points_that_cannot_be_evaluated() {
         let t: Vec<f64> = (0..50).map(|k| k as f64 * 0.1).collect();
-        let y: Vec<f64> = t.iter().map(|t| 2.0 * (-0.7 * t).exp()).collect();
+        let y: Vec<f64> = t.iter().map(|t| 2.0 * (-0.05 * t).exp()).collect();
+        let refused = std::cell::Cell::new(0);
         let r = |x: &[f64]| {
-            (x[1] > 0.0).then(|| t.iter().zip(&y).map(|(t, y)| x[0] * (-x[1] * t).exp() - y).collect())
+            if x[1] <= 0.0 {
+                refused.set(refused.get() + 1);
+                return None;
+            }
+            Some(t.iter().zip(&y).map(|(t, y)| x[0] * (-x[1] * t).exp() - y).collect())
         };
-        let x = minimize(&r, &[1.0, 0.1], t.len(), 1e3);
-        assert!((x[0] - 2.0).abs() < 1e-6 && (x[1] - 0.7).abs() < 1e-6, "{x:?}");
+        let x = minimize(&r, &[1.0, 3.0], t.len(), 1e3);
+        assert!((x[0] - 2.0).abs() < 1e-6 && (x[1] - 0.05).abs() < 1e-6, "{x:?}");
+        assert!(refused.get() > 0, "no refused point was tried, so the test shows nothing");
     }
 }
