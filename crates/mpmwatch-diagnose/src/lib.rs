@@ -46,7 +46,7 @@ pub use candidates::{ActsOn, Physics};
 pub use error::DiagnoseError;
 pub use fitness::fit_pct;
 pub use greybox::{ElementCurve, FittedGreyBox, GreyBox, Structure};
-pub use minimize::minimize;
+pub use minimize::{minimize, minimize_from};
 pub use nominal::{NominalArx, identify as identify_nominal};
 pub use physical::{LEVEL_QUANTILES, PhysicalModel};
 pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};

@@ -1,7 +1,7 @@
 //! The one nonlinear least-squares solver of the diagnosis: Levenberg–Marquardt
 //! (`levenberg-marquardt`) on a residual given as a function of the parameters, with a
 //! forward-difference Jacobian. Every simulation-error fit (the grey-box hypotheses, a physical
-//! model's calibration) goes through [`minimize`].
+//! model's calibration) goes through [`minimize`], or [`minimize_from`] for several starts.
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
@@ -19,6 +19,30 @@ pub fn minimize(
     let problem = Problem { residual, len, blowup, x: DVector::from_column_slice(x0) };
     let (solved, _) = LevenbergMarquardt::new().with_patience(30).minimize(problem);
     solved.x.as_slice().to_vec()
+}
+
+/// [`minimize`] from each of `starts`; the parameters with the least `Σ r(x)²` (a point that
+/// cannot be evaluated, or whose sum is not finite, never wins). `None` without starts. For
+/// fits with local minima, where one start stops in a poor one.
+pub fn minimize_from(
+    residual: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    starts: &[Vec<f64>],
+    len: usize,
+    blowup: f64,
+) -> Option<Vec<f64>> {
+    let cost = |x: &[f64]| {
+        let c: f64 = residual(x).map_or(f64::INFINITY, |r| r.iter().map(|e| e * e).sum());
+        if c.is_finite() { c } else { f64::INFINITY }
+    };
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for x0 in starts {
+        let x = minimize(residual, x0, len, blowup);
+        let c = cost(&x);
+        if best.as_ref().is_none_or(|b| c < b.0) {
+            best = Some((c, x));
+        }
+    }
+    best.map(|b| b.1)
 }
 
 struct Problem<'a> {
@@ -82,6 +106,18 @@ mod tests {
         let r = |x: &[f64]| Some(vec![10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]]);
         let x = minimize(&r, &[-1.2, 1.0], 2, 1e3);
         assert!((x[0] - 1.0).abs() < 1e-6 && (x[1] - 1.0).abs() < 1e-6, "{x:?}");
+    }
+
+    /// Of two starts either side of a double well `r = x² − 1 + 0.1·x` (minima near −1.05 and
+    /// 0.95, both roots, so both reach zero cost), the one that cannot be evaluated loses and
+    /// the other's root wins; without starts there is nothing.
+    #[test]
+    fn the_best_start_wins_and_refused_ones_lose() {
+        let r = |x: &[f64]| (x[0] > -0.5).then(|| vec![x[0] * x[0] - 1.0 + 0.1 * x[0]]);
+        let x = minimize_from(&r, &[vec![-2.0], vec![2.0]], 1, 1e3).unwrap();
+        let root = (-0.1 + (0.01f64 + 4.0).sqrt()) / 2.0;
+        assert!((x[0] - root).abs() < 1e-6, "{x:?}");
+        assert!(minimize_from(&r, &[], 1, 1e3).is_none());
     }
 
     /// A region where the model cannot be evaluated is stepped around, not into: an exponential

@@ -254,28 +254,19 @@ pub fn calibrate(u: &[f64], y: &[f64], ts: f64) -> TwoTanks {
         }
         Some(r)
     };
-    let sse = |x: &[f64]| {
-        let c: f64 = residual(x).map_or(f64::INFINITY, |r| r.iter().map(|e| e * e).sum());
-        if c.is_finite() { c } else { f64::INFINITY }
-    };
     let scale = mpmwatch_core::numerics::std_dev(y, 0).max(1e-12);
     // Several starts: the time scales of the two tanks and the sensor offset span an order of
     // magnitude, and a single start stops in a poor local minimum.
     let ymin = y.iter().fold(f64::MAX, |a, &b| a.min(b));
-    let mut best: Option<(f64, Vec<f64>)> = None;
+    let mut starts = Vec::new();
     for k in [0.02f64, 0.05, 0.1] {
         for k4 in [0.02f64, 0.05, 0.1] {
             for offset in [0.0, 0.5 * ymin] {
-                let x0 = [k.ln(), k.ln(), k.ln(), k4.ln(), offset];
-                let x = mpmwatch_diagnose::minimize(&residual, &x0, len, 1e3 * scale);
-                let c = sse(&x);
-                if best.as_ref().is_none_or(|b| c < b.0) {
-                    best = Some((c, x));
-                }
+                starts.push(vec![k.ln(), k.ln(), k.ln(), k4.ln(), offset]);
             }
         }
     }
-    best.map_or(FALLBACK, |b| as_model(&b.1))
+    mpmwatch_diagnose::minimize_from(&residual, &starts, len, 1e3 * scale).map_or(FALLBACK, |x| as_model(&x))
 }
 
 /// Top of the level sensor's range, volts (in the shared CSV, 47 estimation and 37 validation
@@ -372,10 +363,6 @@ pub fn calibrate_overflowing(
     let (_, h) = start.simulate_overflowing(u, ts, y[0], None);
     let top = h.iter().fold(0.0f64, |m, h| m.max(h[0]));
     let h1_0 = h.first().map_or(1.0, |h| h[0]);
-    let sse = |x: &[f64]| {
-        let c: f64 = residual(x).map_or(f64::INFINITY, |r| r.iter().map(|e| e * e).sum());
-        if c.is_finite() { c } else { f64::INFINITY }
-    };
     let scale = mpmwatch_core::numerics::std_dev(y, 0).max(1e-12);
     let as_start = |m: &TwoTanks, rim: f64, spill: f64, h1_0: f64| {
         let mut x0 = vec![
@@ -403,15 +390,8 @@ pub fn calibrate_overflowing(
         let m = calibrate_overflowing(u, y, ts, start, Refinements { exponents: false, ..refine });
         starts.push(as_start(&m.model, m.upper.level, m.upper.spill.clamp(1e-3, 1.0 - 1e-3), m.h1_0));
     }
-    let mut best: Option<(f64, Vec<f64>)> = None;
-    for x0 in starts {
-        let x = mpmwatch_diagnose::minimize(&residual, &x0, y.len(), 1e3 * scale);
-        let c = sse(&x);
-        if best.as_ref().is_none_or(|b| c < b.0) {
-            best = Some((c, x));
-        }
-    }
-    best.map_or_else(|| unchanged(h1_0), |b| as_model(&b.1))
+    mpmwatch_diagnose::minimize_from(&residual, &starts, y.len(), 1e3 * scale)
+        .map_or_else(|| unchanged(h1_0), |x| as_model(&x))
 }
 
 /// The outflow exponents [`calibrate_overflowing`] admits: wide around Torricelli's ½ (laminar

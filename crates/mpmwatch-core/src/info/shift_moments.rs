@@ -25,8 +25,9 @@ use rustfft::num_complex::Complex64;
 /// in `bounds` (inclusive). `labels` are x's discrete levels (the shifts that leave more than 90 %
 /// of them unchanged are not admissible), `None` for a continuous x (every shift in the bounds
 /// is admissible: no shift reproduces a continuous series), `times` the used times, `moments`
-/// the (mean, spread) of x and of y that the statistic is normalised by. Returns `None` when no shift is admissible
-/// (a dither periodic in every shift), in which case the caller keeps sampled moments.
+/// the (mean, spread) of x and of y that the statistic is normalised by. Returns `None` when no
+/// shift is admissible (a dither periodic in every shift), in which case the caller keeps
+/// sampled moments.
 pub(crate) fn ccf_shift_moments(
     x: &[f64],
     y: &[f64],
