@@ -114,7 +114,7 @@ fn bad_input_exits_nonzero_with_a_message_naming_it() {
 #[test]
 fn bench_json_has_the_contract_keys() {
     let out = json_of(&bin().args(["bench", "--n", "512", "--reps", "3", "--json"]).output().unwrap());
-    for key in ["ksg_binary_ms", "ksg_continuous_ms", "iaaft_ms", "matrix_3x3_ms"] {
+    for key in ["ksg_binary_ms", "ksg_binary_per_lag_ms", "ksg_continuous_ms", "iaaft_ms", "matrix_3x3_ms"] {
         let v = out[key].as_f64().unwrap_or_else(|| panic!("{key} missing: {out}"));
         assert!(v > 0.0 && v.is_finite(), "{key} = {v}");
     }
