@@ -29,6 +29,7 @@ mod linear;
 mod polynomial;
 mod saturation;
 mod stiffness;
+mod storage_limit;
 mod structure;
 
 use std::collections::BTreeMap;
@@ -454,6 +455,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
     vec![
         Box::new(dead_zone::DeadZone),
         Box::new(saturation::InputSaturation),
+        Box::new(storage_limit::StorageLimit),
         Box::new(clip_sensor::ClipSensor),
         Box::new(abs_sensor::AbsSensor),
         Box::new(polynomial::Polynomial { degree: 2 }),
