@@ -108,10 +108,13 @@ pub fn run(opts: &BenchOptions, mut progress: impl FnMut(&str)) -> Result<BenchR
     });
     progress("a binary-dither lag profile, per lag");
     let lags = Lags::new(1, 20)?;
-    // N + 20 samples so that every lag has N pairs, like the one-off estimate.
+    // N + 20 samples so that every lag has N pairs, like the one-off estimate; drawn from a
+    // stream of their own, so that the timings after this one see the draws they always saw.
+    let mut lag_rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    lag_rng.set_stream(1);
     let long_dither: Vec<f64> =
-        (0..n + lags.max).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect();
-    let long_residual: Vec<f64> = ar1(&mut rng, n + lags.max, 0.7)
+        (0..n + lags.max).map(|_| if lag_rng.random::<bool>() { 1.0 } else { -1.0 }).collect();
+    let long_residual: Vec<f64> = ar1(&mut lag_rng, n + lags.max, 0.7)
         .iter()
         .enumerate()
         .map(|(t, v)| v + if t > 0 { 0.3 * long_dither[t - 1] } else { 0.0 })

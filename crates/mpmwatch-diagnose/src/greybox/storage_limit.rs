@@ -52,21 +52,27 @@ impl Element for StorageLimit {
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         let (lo, hi) = (p[1].min(p[2]), p[1].max(p[2]));
-        // A pole outside [0, 1) is no store: its level would not settle, and the simulation
-        // built on it is refused as diverged.
+        // A pole outside [0, 1) is no store (at 1 it never forgets, below 0 it alternates):
+        // the NaN makes the simulation built on it refused as diverged.
         let a = if (0.0..1.0).contains(&p[0]) { p[0] } else { f64::NAN };
         map_input(u, i, |x| store(x, a, lo, hi))
     }
+    /// The capped store's level for an input that follows `sweep`: it lags the input by the
+    /// store's time constant and stops at the limits, so the figure shows both the memory and
+    /// the cap.
     fn trace(&self, p: &[f64], sweep: &[f64]) -> Option<Vec<f64>> {
-        // Swept slowly against the store's time constant, the loop is the static cap.
-        Some(sweep.iter().map(|v| v.clamp(p[1].min(p[2]), p[1].max(p[2]))).collect())
+        (0.0..1.0).contains(&p[0]).then(|| store(sweep, p[0], p[1].min(p[2]), p[1].max(p[2])))
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[1].min(p[2]), p[1].max(p[2]));
-        let samples = -1.0 / p[0].ln();
+        let memory = if p[0] > 0.0 {
+            format!("time constant {:.1} samples", -1.0 / p[0].ln())
+        } else {
+            "no memory".to_string()
+        };
         (
             format!(
-                "{input} fills a store (time constant {samples:.1} samples) whose level cannot leave [{lo:.3}, {hi:.3}], and only that level reaches {output} (a storage that overflows: a tank's rim, a relief)"
+                "{input} fills a store ({memory}) whose level cannot leave [{lo:.3}, {hi:.3}], and only that level reaches {output} (a storage that overflows: a tank's rim, a relief)"
             ),
             BTreeMap::from([("pole".into(), p[0]), ("lower".into(), lo), ("upper".into(), hi)]),
         )
