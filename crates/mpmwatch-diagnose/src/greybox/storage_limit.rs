@@ -57,11 +57,12 @@ impl Element for StorageLimit {
         let a = if (0.0..1.0).contains(&p[0]) { p[0] } else { f64::NAN };
         map_input(u, i, |x| store(x, a, lo, hi))
     }
-    /// The capped store's level for an input that follows `sweep`: it lags the input by the
-    /// store's time constant and stops at the limits, so the figure shows both the memory and
-    /// the cap.
-    fn trace(&self, p: &[f64], sweep: &[f64]) -> Option<Vec<f64>> {
-        (0.0..1.0).contains(&p[0]).then(|| store(sweep, p[0], p[1].min(p[2]), p[1].max(p[2])))
+    /// The store's level for an input held at `v`, once it has settled: the cap itself (the
+    /// store has unit gain). A swept loop would show the memory too, but its shape would depend
+    /// on how fast the figure's sweep runs against the fitted time constant, which the
+    /// description states instead.
+    fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
+        Some(v.clamp(p[1].min(p[2]), p[1].max(p[2])))
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[1].min(p[2]), p[1].max(p[2]));
@@ -123,5 +124,11 @@ mod tests {
         let upper = f.p[1].max(f.p[2]);
         assert!((f.p[0] - 0.9).abs() < 1e-3 && (upper - 0.6).abs() < 1e-3, "{f:?}");
         assert!((f.theta[0] - 0.7).abs() < 1e-3 && (f.theta[1] - 0.5).abs() < 1e-3, "{f:?}");
+        // Its figure is the settled level against a held input: the input itself up to the
+        // cap, the cap beyond (the fitted cap's 1e-3 carried into the map).
+        let c = m.curve(&f, &d, "u", "y").unwrap();
+        for &(v, w) in &c.points {
+            assert!((w - v.min(0.6)).abs() < 1e-3, "{v}: {w}");
+        }
     }
 }
