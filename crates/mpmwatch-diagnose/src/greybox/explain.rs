@@ -13,7 +13,8 @@
 use std::collections::BTreeMap;
 
 use super::{
-    Data, Element, Fitted, Linear, Model, Orders, cv_fit, elements, fit, linear_orders, nominal_cv_fit,
+    CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, elements, fit, linear_orders,
+    nominal_cv_fit,
 };
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
@@ -72,14 +73,14 @@ pub fn explain(
     if !order_sets.contains(&from_nominal) {
         let m = Model { element: &Linear, input: 0, orders: from_nominal.clone() };
         if let Some(v) = cv_fit(&m, d, folds) {
-            if linear.as_ref().is_none_or(|l| v > l.1) {
+            if linear.as_ref().is_none_or(|l| v.mean > l.1.mean) {
                 linear = Some((from_nominal.clone(), v));
             }
             order_sets.push(from_nominal);
         }
     }
     let mut tried: Vec<Tried> = Vec::new();
-    let mut scored: Vec<(f64, usize, usize, usize, usize)> = Vec::new();
+    let mut scored: Vec<(CvScore, usize, usize, usize, usize)> = Vec::new();
     let els = elements();
     for (o, orders) in order_sets.iter().enumerate() {
         for (k, el) in els.iter().enumerate() {
@@ -94,9 +95,10 @@ pub fn explain(
             }
         }
     }
-    let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| l.1);
-    for &(v, k, _, _, _) in &scored {
-        let ph = els[k].physics();
+    let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| l.1.mean);
+    for (v, k, _, _, _) in &scored {
+        let (v, ph) = (v.mean, els[*k].physics());
+        let nominal_cv = nominal_cv.mean;
         match tried.iter_mut().find(|t| t.physics == ph) {
             Some(t) if t.validation_gain_pct >= v - nominal_cv => {}
             Some(t) => t.validation_gain_pct = v - nominal_cv,
@@ -105,17 +107,20 @@ pub fn explain(
             }
         }
     }
+    // The honesty gate, as on the closed-loop path: the correction must raise the mean block FIT
+    // by `min_gain` points and lower no block.
+    let passes = |v: &CvScore| v.mean - nominal_cv.mean >= min_gain && v.min_gain_over(&nominal_cv) >= 0.0;
     let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
-    let best = scored.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max);
+    let best = scored.iter().map(|s| s.0.mean).fold(f64::NEG_INFINITY, f64::max);
     let chosen = scored
         .iter()
-        .filter(|s| s.0 >= best - PARSIMONY)
-        .min_by(|a, b| a.3.cmp(&b.3).then(b.0.total_cmp(&a.0)))
-        .copied();
+        .filter(|s| s.0.mean >= best - PARSIMONY)
+        .min_by(|a, b| a.3.cmp(&b.3).then(b.0.mean.total_cmp(&a.0.mean)));
     if let Some((v, k, i, _, o)) = chosen
-        && v - linear_cv >= NONLINEAR_MARGIN
-        && v - nominal_cv >= min_gain
+        && v.mean - linear_cv >= NONLINEAR_MARGIN
+        && passes(v)
     {
+        let (k, i, o) = (*k, *i, *o);
         let el = els[k].as_ref();
         let m = Model { element: el, input: i, orders: order_sets[o].clone() };
         if let Some(f) = fit(&m, d, &train_rows)
@@ -130,7 +135,7 @@ pub fn explain(
         }
     }
     if let Some((orders, v)) = &linear
-        && v - nominal_cv >= min_gain
+        && passes(v)
     {
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
         if let Some(f) = fit(&m, d, &train_rows)
@@ -138,7 +143,7 @@ pub fn explain(
         {
             let i = flagged.first().copied().unwrap_or(0);
             let (physics, summary, parameters, curve) = linear_change(nominal, &f, orders, i, ts, names);
-            tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v - nominal_cv });
+            tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v.mean - nominal_cv.mean });
             return Explanation {
                 finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
                 corrected: Some(sim),
@@ -153,7 +158,7 @@ pub fn explain(
             names.output,
             t.physics.name(),
             t.validation_gain_pct,
-            lv - nominal_cv
+            lv.mean - nominal_cv.mean
         ),
         _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
     };

@@ -471,34 +471,58 @@ pub use explain::{Names, explain};
 pub use linear::Linear;
 pub use structure::{FittedGreyBox, GreyBox, Structure};
 
-/// The pooled FIT% of a model over the validation blocks of `folds`, each block simulated by
-/// the model fitted on the other rows.
+/// FIT% on each validation block of the folds, each block against its own mean as the held-out
+/// tail is scored, and their mean (the ranking score).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CvScore {
+    /// The mean of `blocks`.
+    pub mean: f64,
+    /// FIT% per validation block, in the folds' order.
+    pub blocks: Vec<f64>,
+}
+
+impl CvScore {
+    fn of(blocks: Vec<f64>) -> Self {
+        let mean = blocks.iter().sum::<f64>() / blocks.len().max(1) as f64;
+        CvScore { mean, blocks }
+    }
+
+    /// The smallest block-by-block gain over `base` (+∞ without blocks).
+    pub fn min_gain_over(&self, base: &CvScore) -> f64 {
+        self.blocks.iter().zip(&base.blocks).map(|(a, b)| a - b).fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The cross-validated FIT of a model: each validation block of `folds` simulated by the model
+/// fitted on the other rows and scored against its own mean, as the held-out tail is (pooled
+/// over blocks, a model would be credited for following the level differences between blocks,
+/// which the tail, one block, does not reward). `None` when a fit fails or diverges.
 pub fn cv_fit(
     model: &Model<'_>,
     d: &Data<'_>,
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
-) -> Option<f64> {
-    let (mut yv, mut sv) = (Vec::new(), Vec::new());
+) -> Option<CvScore> {
+    let mut blocks = Vec::with_capacity(folds.len());
     for (fit_rows, block) in folds {
         let f = fit(model, d, fit_rows)?;
         let s = model.simulate(&f, &d.u, d.y)?;
-        yv.extend(block.clone().map(|t| d.y[t]));
-        sv.extend(block.clone().map(|t| s[t]));
+        blocks.push(fit_pct(&d.y[block.clone()], &s[block.clone()]));
     }
-    let v = fit_pct(&yv, &sv);
-    v.is_finite().then_some(v)
+    let score = CvScore::of(blocks);
+    score.mean.is_finite().then_some(score)
 }
 
-/// The nominal's pooled FIT% over the same validation blocks.
-pub fn nominal_cv_fit(s: &[f64], y: &[f64], folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> f64 {
-    let yv: Vec<f64> = folds.iter().flat_map(|(_, b)| b.clone().map(|t| y[t])).collect();
-    let sv: Vec<f64> = folds.iter().flat_map(|(_, b)| b.clone().map(|t| s[t])).collect();
-    fit_pct(&yv, &sv)
+/// The nominal's FIT over the same validation blocks, scored as [`cv_fit`] scores.
+pub fn nominal_cv_fit(s: &[f64], y: &[f64], folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> CvScore {
+    CvScore::of(folds.iter().map(|(_, b)| fit_pct(&y[b.clone()], &s[b.clone()])).collect())
 }
 
 /// The best linear orders by blocked cross-validation: dead times by the equation-error
 /// simulation on the training rows, input by input, then poles and taps by cross-validation.
-pub fn linear_orders(d: &Data<'_>, folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> Option<(Orders, f64)> {
+pub fn linear_orders(
+    d: &Data<'_>,
+    folds: &[(Vec<usize>, std::ops::Range<usize>)],
+) -> Option<(Orders, CvScore)> {
     let lin = Linear;
     let rows: Vec<usize> = d.train.clone().collect();
     let mut nk = vec![1usize; d.u.len()];
@@ -520,15 +544,15 @@ pub fn linear_orders(d: &Data<'_>, folds: &[(Vec<usize>, std::ops::Range<usize>)
         }
         nk[i] = best.1;
     }
-    let mut best: Option<(Orders, f64)> = None;
+    let mut best: Option<(Orders, CvScore)> = None;
     for na in 1..=3 {
         for nb in 1..=3 {
             let orders = Orders { na, nb, nk: nk.clone() };
             let m = Model { element: &lin, input: 0, orders: orders.clone() };
             let Some(v) = cv_fit(&m, d, folds) else { continue };
             // One more pole or tap must earn a tenth of a point.
-            let penalised = v - 0.1 * (na + nb) as f64;
-            if best.as_ref().is_none_or(|b| penalised > b.1 - 0.1 * (b.0.na + b.0.nb) as f64) {
+            let penalised = v.mean - 0.1 * (na + nb) as f64;
+            if best.as_ref().is_none_or(|b| penalised > b.1.mean - 0.1 * (b.0.na + b.0.nb) as f64) {
                 best = Some((orders, v));
             }
         }
@@ -542,6 +566,25 @@ pub const MAX_DEAD_TIME: usize = 20;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each block is scored against its own mean: a simulation that only follows the blocks'
+    /// levels earns FIT 0 on every block (pooled, it would earn the share of the variance the
+    /// level differences carry); the gate's smallest gain is the worst block's.
+    #[test]
+    fn blocks_are_scored_against_their_own_means() {
+        let y: Vec<f64> =
+            (0..60).map(|t| (t / 20) as f64 * 10.0 + if t % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let s: Vec<f64> = (0..60).map(|t| (t / 20) as f64 * 10.0).collect();
+        let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> =
+            (0..3).map(|k| (Vec::new(), 20 * k..20 * (k + 1))).collect();
+        let score = nominal_cv_fit(&s, &y, &folds);
+        assert_eq!(score.blocks, vec![0.0, 0.0, 0.0]);
+        assert_eq!(score.mean, 0.0);
+        assert!(fit_pct(&y, &s) > 80.0);
+        let other = CvScore::of(vec![5.0, -2.0, 3.0]);
+        assert_eq!(other.mean, 2.0);
+        assert_eq!(other.min_gain_over(&score), -2.0);
+    }
 
     /// A noise-free Hammerstein plant, a dead zone of half-width 0.3 before
     /// `x(t) = 0.8 x(t−1) + 0.5 w(t−2)`: the fit from a start at 0.1 recovers the width and the

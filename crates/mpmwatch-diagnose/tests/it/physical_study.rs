@@ -2,7 +2,8 @@
 //! the nominal is an ARX model fitted by least squares on the record, the input is its own
 //! excitation. The study (ignored; `SEEDS=a..b N=3000 cargo test -p mpmwatch-diagnose --test it
 //! physical_study::study -- --ignored --exact --nocapture`; `CASE=name` for one class, `VERBOSE=1`
-//! for the findings and ranges) prints one line per case and the rates.
+//! for the findings and ranges, `DUMP=dir` for a CSV per case of input, output, nominal and
+//! corrected simulation) prints one line per case and the rates.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
@@ -96,6 +97,13 @@ fn study() {
                 r.description,
                 best
             );
+            if let Ok(dir) = std::env::var("DUMP") {
+                let mut out = String::from("u,y,s,c\n");
+                for t in 0..r.y.len() {
+                    out += &format!("{},{},{},{}\n", r.u[t], r.y[t], r.s[t], d.corrected[0][t]);
+                }
+                std::fs::write(format!("{dir}/{}_{seed}.csv", case.name()), out).unwrap();
+            }
             if std::env::var_os("VERBOSE").is_some() {
                 let cut = d.report.holdout.start_index;
                 let range =
