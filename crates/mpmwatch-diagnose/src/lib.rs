@@ -95,7 +95,8 @@ pub struct DiagnoseOptions {
     pub penalty: f64,
     /// The honesty gate's margin (default 0.5): a finding is reported only when its correction
     /// raises the plain FIT, refitted on two blocks of the training part and scored on the
-    /// third, by this many points on average (and, in a closed loop, lowers no block).
+    /// third, by this many points on average, and lowers no block (on the physical-model path
+    /// in an open loop the average alone counts).
     pub min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,
@@ -708,7 +709,9 @@ fn decide(
     let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
     // The honesty gate: the winner must also raise the plain FIT (what the held-out FIT
     // measures) on the training part's blocks by `min_gain_pct` on average, as on the grey-box
-    // path. In a closed loop it must also lower no block: there the plain FIT is a weak witness
+    // path. In a closed loop it must also lower no block (as on the grey-box path; an open loop
+    // reaches this path only with a physical model, whose overflow the condition withheld, see
+    // docs/diagnose.md): there the plain FIT is a weak witness
     // (the nominal error partly cancels the disturbance through feedback, so even the true
     // correction can lower it), and a finding that loses on one block is withheld rather than
     // shown with a falling fit.

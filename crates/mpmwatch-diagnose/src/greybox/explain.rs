@@ -1,12 +1,15 @@
 //! From the grey-box hypotheses of one output to its finding: every class against the best
 //! re-fitted linear structure and the nominal, by blocked cross-validation in simulation mode.
 //!
-//! The rule, in the currency of the held-out FIT (simulation mode, out of sample):
+//! The rule, in the currency of the held-out FIT (simulation mode, out of sample, each
+//! validation block against its own mean; [`super::CvScore`]):
 //! - a physics element is named when its cross-validated FIT beats the linear re-fit's by
-//!   [`NONLINEAR_MARGIN`] points and the nominal's by the caller's margin;
+//!   [`NONLINEAR_MARGIN`] points, beats the nominal's by the caller's margin on average, and
+//!   lowers no block below the nominal's;
 //! - otherwise the linear re-fit is the finding (a gain, a time constant or a dead time,
-//!   whichever it changes most) when it beats the nominal by the caller's margin;
-//! - otherwise the finding is `unexplained`, naming the best candidate and its gain.
+//!   whichever it changes most) when it passes the same two tests against the nominal;
+//! - otherwise the finding is `unexplained`, naming the best candidate, its mean gain and its
+//!   worst block's.
 //!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
 
@@ -151,14 +154,16 @@ pub fn explain(
             };
         }
     }
-    tried.sort_by(|a, b| b.validation_gain_pct.total_cmp(&a.validation_gain_pct));
-    let summary = match (tried.first(), &linear) {
-        (Some(t), Some((_, lv))) => format!(
-            "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points: the best candidate, {}, changes the cross-validated FIT by {:+.1} points, the re-fitted linear model by {:+.1}",
+    let top = scored.iter().max_by(|a, b| a.0.mean.total_cmp(&b.0.mean));
+    let summary = match (top, &linear) {
+        (Some((v, k, ..)), Some((_, lv))) => format!(
+            "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
             names.output,
-            t.physics.name(),
-            t.validation_gain_pct,
-            lv.mean - nominal_cv.mean
+            els[*k].physics().name(),
+            v.mean - nominal_cv.mean,
+            v.min_gain_over(&nominal_cv),
+            lv.mean - nominal_cv.mean,
+            lv.min_gain_over(&nominal_cv),
         ),
         _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
     };

@@ -483,7 +483,9 @@ pub struct CvScore {
 
 impl CvScore {
     fn of(blocks: Vec<f64>) -> Self {
-        let mean = blocks.iter().sum::<f64>() / blocks.len().max(1) as f64;
+        // No block to score is no score (NaN fails every comparison).
+        let mean =
+            if blocks.is_empty() { f64::NAN } else { blocks.iter().sum::<f64>() / blocks.len() as f64 };
         CvScore { mean, blocks }
     }
 
@@ -503,7 +505,7 @@ pub fn cv_fit(
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
 ) -> Option<CvScore> {
     let mut blocks = Vec::with_capacity(folds.len());
-    for (fit_rows, block) in folds {
+    for (fit_rows, block) in folds.iter().filter(|(_, b)| varies(&d.y[b.clone()])) {
         let f = fit(model, d, fit_rows)?;
         let s = model.simulate(&f, &d.u, d.y)?;
         blocks.push(fit_pct(&d.y[block.clone()], &s[block.clone()]));
@@ -514,7 +516,19 @@ pub fn cv_fit(
 
 /// The nominal's FIT over the same validation blocks, scored as [`cv_fit`] scores.
 pub fn nominal_cv_fit(s: &[f64], y: &[f64], folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> CvScore {
-    CvScore::of(folds.iter().map(|(_, b)| fit_pct(&y[b.clone()], &s[b.clone()])).collect())
+    CvScore::of(
+        folds
+            .iter()
+            .filter(|(_, b)| varies(&y[b.clone()]))
+            .map(|(_, b)| fit_pct(&y[b.clone()], &s[b.clone()]))
+            .collect(),
+    )
+}
+
+/// Whether a validation block's output moves at all: a constant block (a stuck sensor, a level
+/// held at its rim) has no FIT (−∞ for any error), so it is left out of every score alike.
+fn varies(y: &[f64]) -> bool {
+    y.first().is_some_and(|&f| y.iter().any(|&v| v != f))
 }
 
 /// The best linear orders by blocked cross-validation: dead times by the equation-error
@@ -584,6 +598,11 @@ mod tests {
         let other = CvScore::of(vec![5.0, -2.0, 3.0]);
         assert_eq!(other.mean, 2.0);
         assert_eq!(other.min_gain_over(&score), -2.0);
+        // A constant block has no FIT (−∞ for any error) and is left out.
+        let mut flat = y.clone();
+        flat[20..40].iter_mut().for_each(|v| *v = 10.0);
+        assert_eq!(nominal_cv_fit(&s, &flat, &folds).blocks, vec![0.0, 0.0]);
+        assert!(CvScore::of(Vec::new()).mean.is_nan());
     }
 
     /// A noise-free Hammerstein plant, a dead zone of half-width 0.3 before
