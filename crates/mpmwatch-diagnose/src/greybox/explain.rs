@@ -299,8 +299,16 @@ fn linear_change(
     let (d_old, tau_old) = rise(&s_old);
     let settle = |d: usize, tau: f64| d as f64 + 5.0 * tau;
     let settle = settle(d_new, tau_new).max(settle(d_old, tau_old)).ceil() as usize + 1;
-    let (physics, summary, parameters) =
+    let (physics, mut summary, parameters) =
         change(&s_new, &s_old, (d_new, tau_new), (d_old, tau_old), ts, names, i);
+    // A dead time at the search's bound is a boundary estimate: the fit would have taken a
+    // longer one had it been offered, so the figure is a lower bound, and the reader is told.
+    if physics == Physics::DeadTime && orders.nk.get(i).is_some_and(|&k| k >= super::MAX_DEAD_TIME) {
+        summary += &format!(
+            "; this is the longest dead time the re-fit searches ({} samples), so the record's may be longer",
+            super::MAX_DEAD_TIME
+        );
+    }
     (physics, summary, parameters, step_curve(physics, &s_new, &s_old, settle, ts, names, i))
 }
 
@@ -394,8 +402,9 @@ mod tests {
         // The record's plant answers three samples later.
         let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0] };
         let orders = Orders { na: 1, nb: 1, nk: vec![4] };
-        let (physics, _, parameters, c) = linear_change(&model, &late, &orders, 0, ts, &names);
+        let (physics, summary, parameters, c) = linear_change(&model, &late, &orders, 0, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
+        assert!(!summary.contains("longest dead time"), "{summary}");
         assert!((parameters["extra_dead_time_s"] - 3.0 * ts).abs() < 1e-12, "{parameters:?}");
         assert_eq!(first_move(&c.points), first_move(&c.baseline) + 3);
         assert!(settled(&c.points) && settled(&c.baseline), "the window ends before both settle");
@@ -405,6 +414,12 @@ mod tests {
         for (k, &(t, v)) in c.baseline.iter().enumerate() {
             assert_eq!((t, v), (k as f64 * ts, own[k]), "the baseline is the model's own step response");
         }
+
+        // A dead time at the search's bound is said to be one.
+        let orders = Orders { na: 1, nb: 1, nk: vec![crate::greybox::MAX_DEAD_TIME] };
+        let (physics, summary, ..) = linear_change(&model, &late, &orders, 0, ts, &names);
+        assert_eq!(physics, Physics::DeadTime);
+        assert!(summary.contains("longest dead time the re-fit searches (20 samples)"), "{summary}");
 
         // Twice the gain, the same timing.
         let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0] };
