@@ -532,7 +532,8 @@ fn varies(y: &[f64]) -> bool {
 }
 
 /// The best linear orders by blocked cross-validation: dead times by the simulation error on
-/// the training rows of a [`fit`] at two poles and two taps, input by input (the
+/// the training rows (the same rows for every dead time) of a [`fit`] at two poles and two
+/// taps, input by input (the
 /// equation-error fit alone is biased under coloured noise and a slow pole, and picked a dead
 /// time of 13 samples for a 7-sample transport delay), then poles and taps by cross-validation.
 pub fn linear_orders(
@@ -540,7 +541,11 @@ pub fn linear_orders(
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
 ) -> Option<(Orders, CvScore)> {
     let lin = Linear;
-    let rows: Vec<usize> = d.train.clone().collect();
+    // Every dead time is scored on the same rows: from the folds' first row (after the
+    // warm-up) and past the longest dead time's initial rows, which a simulation copies from
+    // the record (zero error there would favour the longer dead times).
+    let first = folds.first().map_or(d.train.start, |f| f.1.start).max(d.train.start + MAX_DEAD_TIME + 2);
+    let rows: Vec<usize> = (first..d.train.end).collect();
     let mut nk = vec![1usize; d.u.len()];
     let sim_err = |orders: &Orders| -> f64 {
         let m = Model { element: &lin, input: 0, orders: orders.clone() };
