@@ -100,14 +100,11 @@ pub fn explain(
     }
     let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| l.1.mean);
     for (v, k, _, _, _) in &scored {
-        let (v, ph) = (v.mean, els[*k].physics());
-        let nominal_cv = nominal_cv.mean;
+        let (gain, ph) = (v.mean - nominal_cv.mean, els[*k].physics());
         match tried.iter_mut().find(|t| t.physics == ph) {
-            Some(t) if t.validation_gain_pct >= v - nominal_cv => {}
-            Some(t) => t.validation_gain_pct = v - nominal_cv,
-            None => {
-                tried.push(Tried { physics: ph, score_vs_null: None, validation_gain_pct: v - nominal_cv })
-            }
+            Some(t) if t.validation_gain_pct >= gain => {}
+            Some(t) => t.validation_gain_pct = gain,
+            None => tried.push(Tried { physics: ph, score_vs_null: None, validation_gain_pct: gain }),
         }
     }
     // The honesty gate, as on the closed-loop path: the correction must raise the mean block FIT

@@ -531,11 +531,11 @@ fn varies(y: &[f64]) -> bool {
     y.first().is_some_and(|&f| y.iter().any(|&v| v != f))
 }
 
-/// The best linear orders by blocked cross-validation: dead times by the simulation error on
-/// the training rows (the same rows for every dead time) of a [`fit`] at two poles and two
-/// taps, input by input (the
-/// equation-error fit alone is biased under coloured noise and a slow pole, and picked a dead
-/// time of 13 samples for a 7-sample transport delay), then poles and taps by cross-validation.
+/// The best linear orders by blocked cross-validation: dead times input by input, by the
+/// simulation error on the training rows (the same rows for every dead time) of a [`fit`] at
+/// two poles and two taps, then poles and taps by cross-validation. The dead time is judged on
+/// a fit by simulation error, not on the equation-error fit alone, which coloured noise and a
+/// slow pole bias (docs/diagnose.md, "The dead-time search of the linear re-fit").
 pub fn linear_orders(
     d: &Data<'_>,
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
