@@ -455,7 +455,9 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             let ctx = &ctxs[cv];
             if greybox_path {
                 let (y, s0) = (input.outputs[j].values, input.simulated[j].values);
-                let d = greybox::Data { u: u_all.clone(), y, train: 0..n_train, nominal: Some(s0) };
+                let noise_order = if open_loop { 0 } else { CLOSED_LOOP_NOISE_ORDER };
+                let d =
+                    greybox::Data { u: u_all.clone(), y, train: 0..n_train, nominal: Some(s0), noise_order };
                 let names = greybox::Names {
                     inputs: input.inputs.iter().map(|u| u.name).collect(),
                     output: input.outputs[j].name,
@@ -543,6 +545,11 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
 /// Share of an input's variance that its excitations may leave unexplained before the loop
 /// counts as closed: numerical noise only (an input equal to its excitation leaves about 1e-30).
 const CLOSED_LOOP_SHARE: f64 = 1e-6;
+
+/// Order of the AR noise model of a grey-box fit on a dithered record
+/// ([`DiagnoseOptions::greybox_closed_loop`]): the disturbances of a plant are coloured, often
+/// two-pole, and load steps need a pole near one; four poles cover both.
+const CLOSED_LOOP_NOISE_ORDER: usize = 4;
 
 /// The median spacing of the time axis; it must increase strictly.
 fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {

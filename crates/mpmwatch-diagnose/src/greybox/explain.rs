@@ -142,7 +142,9 @@ pub fn explain(
             && let Some(sim) = m.simulate(&f, &d.u, d.y)
         {
             let i = flagged.first().copied().unwrap_or(0);
-            let (physics, summary, parameters, curve) = linear_change(nominal, &f, orders, i, ts, names);
+            let modelled = nominal.has_channel(i, d.u[i], s);
+            let (physics, summary, parameters, curve) =
+                linear_change(nominal, &f, orders, i, modelled, ts, names);
             tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v.mean - nominal_cv.mean });
             return Explanation {
                 finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
@@ -276,14 +278,16 @@ fn step_curve(
     }
 }
 
-/// What a linear re-fit changes against the nominal, for input `i`: the dead time when the
-/// responses start at different samples, else the gain or the time constant, whichever moved
-/// most (as a log ratio); with both step responses drawn.
+/// What a linear re-fit changes against the nominal, for input `i`: a missing coupling when the
+/// model has no path from it (`modelled` false), the dead time when the responses start at
+/// different samples, else the gain or the time constant, whichever moved most (as a log
+/// ratio); with both step responses drawn.
 fn linear_change(
     nominal: &NominalArx,
     f: &Fitted,
     orders: &Orders,
     i: usize,
+    modelled: bool,
     ts: f64,
     names: &Names<'_>,
 ) -> (Physics, String, BTreeMap<String, f64>, super::ElementCurve) {
@@ -296,8 +300,19 @@ fn linear_change(
     let (d_old, tau_old) = rise(&s_old);
     let settle = |d: usize, tau: f64| d as f64 + 5.0 * tau;
     let settle = settle(d_new, tau_new).max(settle(d_old, tau_old)).ceil() as usize + 1;
-    let (physics, mut summary, parameters) =
-        change(&s_new, &s_old, (d_new, tau_new), (d_old, tau_old), ts, names, i);
+    let (physics, mut summary, parameters) = if modelled {
+        change(&s_new, &s_old, (d_new, tau_new), (d_old, tau_old), ts, names, i)
+    } else {
+        let (g, inp, out) = (s_new[n - 1], names.inputs[i], names.output);
+        (
+            Physics::MissingCoupling,
+            format!(
+                "{inp} acts on {out} (steady-state gain {g:.4}, dead time {:.3} s), a path the model leaves out",
+                d_new as f64 * ts
+            ),
+            BTreeMap::from([("gain".into(), g), ("dead_time_s".into(), d_new as f64 * ts)]),
+        )
+    };
     // A dead time at the search's bound is a boundary estimate: the fit would have taken a
     // longer one had it been offered, so the figure is a lower bound, and the reader is told.
     if physics == Physics::DeadTime && orders.nk.get(i).is_some_and(|&k| k >= super::MAX_DEAD_TIME) {
@@ -399,7 +414,7 @@ mod tests {
         // The record's plant answers three samples later.
         let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0] };
         let orders = Orders { na: 1, nb: 1, nk: vec![4] };
-        let (physics, summary, parameters, c) = linear_change(&model, &late, &orders, 0, ts, &names);
+        let (physics, summary, parameters, c) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
         assert!(!summary.contains("longest dead time"), "{summary}");
         assert!((parameters["extra_dead_time_s"] - 3.0 * ts).abs() < 1e-12, "{parameters:?}");
@@ -414,16 +429,23 @@ mod tests {
 
         // A dead time at the search's bound is said to be one.
         let orders = Orders { na: 1, nb: 1, nk: vec![crate::greybox::MAX_DEAD_TIME] };
-        let (physics, summary, ..) = linear_change(&model, &late, &orders, 0, ts, &names);
+        let (physics, summary, ..) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
         assert!(summary.contains("longest dead time the re-fit searches (20 samples)"), "{summary}");
 
         // Twice the gain, the same timing.
         let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0] };
         let orders = Orders { na: 1, nb: 1, nk: vec![1] };
-        let (physics, _, _, c) = linear_change(&model, &strong, &orders, 0, ts, &names);
+        let (physics, _, _, c) = linear_change(&model, &strong, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::Gain);
         let (end_new, end_old) = (c.points.last().unwrap().1, c.baseline.last().unwrap().1);
         assert!((end_new - 2.0).abs() < 0.04 && (end_old - 1.0).abs() < 0.02, "{end_new} {end_old}");
+
+        // A path the model does not have is a missing coupling, whatever the step looks like;
+        // its gain is the re-fit's steady state (0.4 / 0.2, settled to 0.8^2000 in 2000 samples).
+        let (physics, summary, parameters, _) = linear_change(&model, &strong, &orders, 0, false, ts, &names);
+        assert_eq!(physics, Physics::MissingCoupling, "{summary}");
+        assert!((parameters["gain"] - 2.0).abs() < 1e-9, "{parameters:?}");
+        assert!(summary.contains("a path the model leaves out"), "{summary}");
     }
 }
