@@ -21,6 +21,7 @@
 
 mod abs_sensor;
 mod backlash;
+mod bilinear;
 mod clip_sensor;
 mod dead_zone;
 mod explain;
@@ -519,6 +520,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(clip_sensor::ClipSensor),
         Box::new(abs_sensor::AbsSensor),
         Box::new(polynomial::Polynomial { degree: 2 }),
+        Box::new(bilinear::Bilinear),
         Box::new(stiffness::CubicStiffness),
         Box::new(friction::Coulomb { on_change: false }),
         Box::new(friction::Coulomb { on_change: true }),

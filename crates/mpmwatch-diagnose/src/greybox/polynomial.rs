@@ -20,7 +20,7 @@ pub struct Polynomial {
 }
 
 /// The parameters `[mean, sd, min, max]` of `x`.
-fn centring_of(x: &[f64]) -> Vec<f64> {
+pub(super) fn centring_of(x: &[f64]) -> Vec<f64> {
     let n = x.len().max(1) as f64;
     let m = x.iter().sum::<f64>() / n;
     let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt().max(1e-12);
@@ -30,7 +30,7 @@ fn centring_of(x: &[f64]) -> Vec<f64> {
 }
 
 /// The standardised value whose power the dynamics see for an input `v`, under `p`.
-fn standardised(p: &[f64], v: f64) -> f64 {
+pub(super) fn standardised(p: &[f64], v: f64) -> f64 {
     let (m, sd) = (p.first().copied().unwrap_or(0.0), p.get(1).copied().unwrap_or(1.0).max(1e-12));
     let (lo, hi) =
         (p.get(2).copied().unwrap_or(f64::NEG_INFINITY), p.get(3).copied().unwrap_or(f64::INFINITY));
