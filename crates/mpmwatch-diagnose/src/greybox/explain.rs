@@ -66,17 +66,20 @@ pub fn explain(
     ts: f64,
     names: &Names<'_>,
 ) -> Explanation {
-    let nominal_cv = nominal_cv_fit(s, d.y, folds);
+    let nominal_cv = nominal_cv_fit(s, d.y, folds, d.noise_order);
+    // Candidates are ranked in the currency their fits were made in (see `CvScore::rank`); the
+    // gate is always the plain FIT's.
+    let rank = |v: &CvScore| v.rank(&nominal_cv, d.noise_order);
     // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
     // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders are
     // the user's knowledge of the plant). The linear model competes at both.
-    let mut linear = linear_orders(d, folds);
+    let mut linear = linear_orders(d, folds, &nominal_cv);
     let from_nominal = nominal_orders(nominal, d.u.len());
     let mut order_sets: Vec<Orders> = linear.iter().map(|l| l.0.clone()).collect();
     if !order_sets.contains(&from_nominal) {
         let m = Model { element: &Linear, input: 0, orders: from_nominal.clone() };
         if let Some(v) = cv_fit(&m, d, folds) {
-            if linear.as_ref().is_none_or(|l| v.mean > l.1.mean) {
+            if linear.as_ref().is_none_or(|l| rank(&v) > rank(&l.1)) {
                 linear = Some((from_nominal.clone(), v));
             }
             order_sets.push(from_nominal);
@@ -98,7 +101,7 @@ pub fn explain(
             }
         }
     }
-    let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| l.1.mean);
+    let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| rank(&l.1));
     for (v, k, _, _, _) in &scored {
         let (gain, ph) = (v.mean - nominal_cv.mean, els[*k].physics());
         match tried.iter_mut().find(|t| t.physics == ph) {
@@ -111,13 +114,13 @@ pub fn explain(
     // by `min_gain` points and lower no block.
     let passes = |v: &CvScore| v.mean - nominal_cv.mean >= min_gain && v.min_gain_over(&nominal_cv) >= 0.0;
     let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
-    let best = scored.iter().map(|s| s.0.mean).fold(f64::NEG_INFINITY, f64::max);
+    let best = scored.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
     let chosen = scored
         .iter()
-        .filter(|s| s.0.mean >= best - PARSIMONY)
-        .min_by(|a, b| a.3.cmp(&b.3).then(b.0.mean.total_cmp(&a.0.mean)));
+        .filter(|s| rank(&s.0) >= best - PARSIMONY)
+        .min_by(|a, b| a.3.cmp(&b.3).then(rank(&b.0).total_cmp(&rank(&a.0))));
     if let Some((v, k, i, _, o)) = chosen
-        && v.mean - linear_cv >= NONLINEAR_MARGIN
+        && rank(v) - linear_cv >= NONLINEAR_MARGIN
         && passes(v)
     {
         let (k, i, o) = (*k, *i, *o);
@@ -153,7 +156,7 @@ pub fn explain(
             };
         }
     }
-    let top = scored.iter().max_by(|a, b| a.0.mean.total_cmp(&b.0.mean));
+    let top = scored.iter().max_by(|a, b| rank(&a.0).total_cmp(&rank(&b.0)));
     let summary = match (top, &linear) {
         (Some((v, k, ..)), Some((_, lv))) => format!(
             "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
@@ -412,7 +415,7 @@ mod tests {
         let first_move = |c: &[(f64, f64)]| c.iter().position(|p| p.1.abs() > 1e-9).unwrap();
 
         // The record's plant answers three samples later.
-        let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0] };
+        let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0], noise: vec![] };
         let orders = Orders { na: 1, nb: 1, nk: vec![4] };
         let (physics, summary, parameters, c) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
@@ -434,7 +437,7 @@ mod tests {
         assert!(summary.contains("longest dead time the re-fit searches (20 samples)"), "{summary}");
 
         // Twice the gain, the same timing.
-        let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0] };
+        let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0], noise: vec![] };
         let orders = Orders { na: 1, nb: 1, nk: vec![1] };
         let (physics, _, _, c) = linear_change(&model, &strong, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::Gain);

@@ -274,6 +274,9 @@ pub struct Fitted {
     pub p: Vec<f64>,
     /// `α`, then `β` per signal, then `γ`, then `c`.
     pub theta: Vec<f64>,
+    /// The AR noise model of a prediction-error fit, `e(t) = Σ_k a_k e(t−k) + ε(t)` for the
+    /// simulation error `e`; empty for an output-error fit (white noise).
+    pub noise: Vec<f64>,
 }
 
 /// A structure ready to simulate: an element on input `input`, with orders.
@@ -400,7 +403,7 @@ impl Model<'_> {
         let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
         let theta = least_squares_rows(&refs, y, &used)?;
         debug_assert_eq!(theta.len(), self.n_theta(sig.len()));
-        Some(Fitted { p: p.to_vec(), theta })
+        Some(Fitted { p: p.to_vec(), theta, noise: Vec::new() })
     }
 }
 
@@ -435,6 +438,7 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
         let fitted = |x: &[f64]| Fitted {
             p: fixed.iter().chain(&x[..n_p]).copied().collect(),
             theta: x[n_p..].to_vec(),
+            noise: Vec::new(),
         };
         let residual = |x: &[f64]| -> Option<Vec<f64>> {
             let s = model.simulate(&fitted(x), &d.u, d.y)?;
@@ -460,11 +464,41 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
     Some(prediction_error_fit(model, d, rows, best, scale))
 }
 
+/// The rows of `rows` whose `p` predecessors are rows too: where a whitening filter of order
+/// `p` reaches no excluded block.
+fn whitenable(rows: &[usize], p: usize) -> Vec<usize> {
+    let inside: std::collections::HashSet<usize> = rows.iter().copied().collect();
+    rows.iter().copied().filter(|&t| t >= p && (1..=p).all(|k| inside.contains(&(t - k)))).collect()
+}
+
+/// The AR(`p`) model `e(t) = Σ_k a_k e(t−k) + ε(t)` of `e` by least squares on `rows` (each
+/// with its `p` predecessors); `None` when too few rows or the fit fails, empty for `p = 0`.
+fn ar_fit(e: &[f64], rows: &[usize], p: usize) -> Option<Vec<f64>> {
+    if p == 0 {
+        return Some(Vec::new());
+    }
+    let used = whitenable(rows, p);
+    if used.len() < 10 * p {
+        return None;
+    }
+    let lagged: Vec<Vec<f64>> =
+        (1..=p).map(|k| (0..e.len()).map(|t| if t >= k { e[t - k] } else { 0.0 }).collect()).collect();
+    let refs: Vec<&[f64]> = lagged.iter().map(Vec::as_slice).collect();
+    least_squares_rows(&refs, e, &used)
+}
+
+/// The one-step prediction error at `t` of a simulation error `e` under the AR noise model `a`
+/// (`t` must have `a.len()` predecessors).
+fn whitened(e: &[f64], a: &[f64], t: usize) -> f64 {
+    e[t] - a.iter().enumerate().map(|(k, ak)| ak * e[t - k - 1]).sum::<f64>()
+}
+
 /// The prediction-error refinement of an output-error fit `start`: an AR noise model of order
 /// `d.noise_order` fitted to its simulation error gives the start of the noise coefficients,
-/// then they, every coefficient and the element's free parameters are searched together for the least whitened error on the
-/// rows of `rows` whose `p` predecessors are rows too (the whitening reaches no excluded block).
-/// The start is returned when the refinement cannot simulate.
+/// then they, every coefficient and the element's free parameters are searched together for
+/// the least one-step prediction error on the rows of `rows` the whitening can use
+/// ([`whitenable`]: it reaches no excluded block). The start is returned when the refinement
+/// cannot simulate.
 fn prediction_error_fit(
     model: &Model<'_>,
     d: &Data<'_>,
@@ -473,40 +507,27 @@ fn prediction_error_fit(
     scale: f64,
 ) -> Fitted {
     let p = d.noise_order;
-    let inside: std::collections::HashSet<usize> = rows.iter().copied().collect();
-    let used: Vec<usize> =
-        rows.iter().copied().filter(|&t| t >= p && (1..=p).all(|k| inside.contains(&(t - k)))).collect();
-    let Some(s0) = model.simulate(&start, &d.u, d.y) else { return start };
-    let e0: Vec<f64> = s0.iter().zip(d.y).map(|(a, b)| a - b).collect();
-    let lagged: Vec<Vec<f64>> =
-        (1..=p).map(|k| (0..e0.len()).map(|t| if t >= k { e0[t - k] } else { 0.0 }).collect()).collect();
-    let refs: Vec<&[f64]> = lagged.iter().map(Vec::as_slice).collect();
+    let used = whitenable(rows, p);
     if used.len() < 3 * (p + start.theta.len()) {
         return start;
     }
-    let Some(ar) = least_squares_rows(&refs, &e0, &used) else { return start };
+    let Some(s0) = model.simulate(&start, &d.u, d.y) else { return start };
+    let e0: Vec<f64> = s0.iter().zip(d.y).map(|(a, b)| a - b).collect();
+    let Some(ar) = ar_fit(&e0, rows, p) else { return start };
     let (fixed, free) = start.p.split_at(model.element.fixed().min(start.p.len()));
     let (n_p, n_theta) = (free.len(), start.theta.len());
     let fitted = |x: &[f64]| Fitted {
         p: fixed.iter().chain(&x[..n_p]).copied().collect(),
         theta: x[n_p..n_p + n_theta].to_vec(),
+        noise: x[n_p + n_theta..].to_vec(),
     };
-    // e(t) = Σ a_k e(t−k) + ε(t): the one-step prediction error is e(t) − Σ a_k e(t−k).
     let residual = |x: &[f64]| -> Option<Vec<f64>> {
         let s = model.simulate(&fitted(x), &d.u, d.y)?;
-        let a = &x[n_p + n_theta..];
-        Some(
-            used.iter()
-                .map(|&t| {
-                    let e = |t: usize| s[t] - d.y[t];
-                    e(t) - a.iter().enumerate().map(|(k, ak)| ak * e(t - k - 1)).sum::<f64>()
-                })
-                .collect(),
-        )
+        let e: Vec<f64> = s.iter().zip(d.y).map(|(a, b)| a - b).collect();
+        Some(used.iter().map(|&t| whitened(&e, &x[n_p + n_theta..], t)).collect())
     };
     let x0: Vec<f64> = free.iter().chain(&start.theta).chain(&ar).copied().collect();
-    let x = minimize(&residual, &x0, used.len(), 1e3 * scale);
-    let f = fitted(&x);
+    let f = fitted(&minimize(&residual, &x0, used.len(), 1e3 * scale));
     if model.simulate(&f, &d.u, d.y).is_some() { f } else { start }
 }
 
@@ -534,57 +555,103 @@ pub use linear::Linear;
 pub use structure::{FittedGreyBox, GreyBox, Structure};
 
 /// FIT% on each validation block of the folds, each block against its own mean as the held-out
-/// tail is scored, and their mean (the ranking score).
+/// tail is scored, and their mean (the ranking score in open loop); with the RMS of the one-step
+/// prediction error on each block (the ranking currency on a dithered record, see
+/// [`CvScore::prediction_gain_over`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CvScore {
     /// The mean of `blocks`.
     pub mean: f64,
     /// FIT% per validation block, in the folds' order.
     pub blocks: Vec<f64>,
+    /// RMS of the one-step prediction error per validation block under the fit's noise model
+    /// (the simulation error itself for an output-error fit), in the order of `blocks`.
+    pub prediction_rms: Vec<f64>,
 }
 
 impl CvScore {
-    fn of(blocks: Vec<f64>) -> Self {
+    fn of(blocks: Vec<f64>, prediction_rms: Vec<f64>) -> Self {
         // No block to score is no score (NaN fails every comparison).
         let mean =
             if blocks.is_empty() { f64::NAN } else { blocks.iter().sum::<f64>() / blocks.len() as f64 };
-        CvScore { mean, blocks }
+        CvScore { mean, blocks, prediction_rms }
     }
 
     /// The smallest block-by-block gain over `base` (+∞ without blocks).
     pub fn min_gain_over(&self, base: &CvScore) -> f64 {
         self.blocks.iter().zip(&base.blocks).map(|(a, b)| a - b).fold(f64::INFINITY, f64::min)
     }
+
+    /// How much smaller the one-step prediction error is than `base`'s, percent of `base`'s
+    /// RMS, averaged over the blocks (NaN without blocks). In a closed loop the disturbance
+    /// dominates a simulation's error and every candidate's FIT alike; the prediction error,
+    /// with the disturbance's colour removed by each fit's noise model, is the currency the
+    /// fits were made in and separates candidates by what they explain of the plant.
+    pub fn prediction_gain_over(&self, base: &CvScore) -> f64 {
+        let g: Vec<f64> = self
+            .prediction_rms
+            .iter()
+            .zip(&base.prediction_rms)
+            .map(|(a, b)| 100.0 * (1.0 - a / b))
+            .collect();
+        if g.is_empty() { f64::NAN } else { g.iter().sum::<f64>() / g.len() as f64 }
+    }
+
+    /// The score candidates are ranked by, against the nominal's `base`: the mean FIT for an
+    /// output-error fit (`noise_order` 0, open loop), the prediction gain for a
+    /// prediction-error fit (a dithered record).
+    pub fn rank(&self, base: &CvScore, noise_order: usize) -> f64 {
+        if noise_order > 0 { self.prediction_gain_over(base) } else { self.mean }
+    }
+}
+
+/// RMS over `block` of the one-step prediction error of a simulation `s` of `y` under the AR
+/// noise model `a` (the first `a.len()` rows of the record have no prediction and are skipped).
+fn prediction_rms(s: &[f64], y: &[f64], a: &[f64], block: std::ops::Range<usize>) -> f64 {
+    let e: Vec<f64> = s.iter().zip(y).map(|(a, b)| a - b).collect();
+    let rows = block.start.max(a.len())..block.end;
+    let n = rows.len().max(1) as f64;
+    (rows.map(|t| whitened(&e, a, t).powi(2)).sum::<f64>() / n).sqrt()
 }
 
 /// The cross-validated FIT of a model: each validation block of `folds` simulated by the model
 /// fitted on the other rows and scored against its own mean, as the held-out tail is (pooled
 /// over blocks, a model would be credited for following the level differences between blocks,
-/// which the tail, one block, does not reward). `None` when a fit fails or diverges.
+/// which the tail, one block, does not reward), and its one-step prediction error there.
+/// `None` when a fit fails or diverges.
 pub fn cv_fit(
     model: &Model<'_>,
     d: &Data<'_>,
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
 ) -> Option<CvScore> {
-    let mut blocks = Vec::with_capacity(folds.len());
+    let (mut blocks, mut rms) = (Vec::with_capacity(folds.len()), Vec::with_capacity(folds.len()));
     for (fit_rows, block) in folds.iter().filter(|(_, b)| varies(&d.y[b.clone()])) {
         let f = fit(model, d, fit_rows)?;
         let s = model.simulate(&f, &d.u, d.y)?;
         blocks.push(fit_pct(&d.y[block.clone()], &s[block.clone()]));
+        rms.push(prediction_rms(&s, d.y, &f.noise, block.clone()));
     }
-    let score = CvScore::of(blocks);
+    let score = CvScore::of(blocks, rms);
     score.mean.is_finite().then_some(score)
 }
 
-/// The nominal's FIT over the same validation blocks, scored as [`cv_fit`] scores.
-pub fn nominal_cv_fit(s: &[f64], y: &[f64], folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> CvScore {
-    CvScore::of(
-        folds
-            .iter()
-            .filter(|(_, b)| varies(&y[b.clone()]))
-            .map(|(_, b)| fit_pct(&y[b.clone()], &s[b.clone()]))
-            .collect(),
-    )
+/// The nominal's FIT over the same validation blocks, scored as [`cv_fit`] scores; its
+/// prediction error under an AR model of order `noise_order` of its simulation error, fitted on
+/// each fold's fit rows (none for 0).
+pub fn nominal_cv_fit(
+    s: &[f64],
+    y: &[f64],
+    folds: &[(Vec<usize>, std::ops::Range<usize>)],
+    noise_order: usize,
+) -> CvScore {
+    let e: Vec<f64> = s.iter().zip(y).map(|(a, b)| a - b).collect();
+    let (mut blocks, mut rms) = (Vec::new(), Vec::new());
+    for (fit_rows, b) in folds.iter().filter(|(_, b)| varies(&y[b.clone()])) {
+        blocks.push(fit_pct(&y[b.clone()], &s[b.clone()]));
+        let a = ar_fit(&e, fit_rows, noise_order).unwrap_or_default();
+        rms.push(prediction_rms(s, y, &a, b.clone()));
+    }
+    CvScore::of(blocks, rms)
 }
 
 /// Whether a validation block's output moves at all: a constant block (a stuck sensor, a level
@@ -601,6 +668,7 @@ fn varies(y: &[f64]) -> bool {
 pub fn linear_orders(
     d: &Data<'_>,
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
+    base: &CvScore,
 ) -> Option<(Orders, CvScore)> {
     let lin = Linear;
     // Every dead time is scored on the same rows: from the folds' first row (after the
@@ -611,9 +679,13 @@ pub fn linear_orders(
     let mut nk = vec![1usize; d.u.len()];
     let sim_err = |orders: &Orders| -> f64 {
         let m = Model { element: &lin, input: 0, orders: orders.clone() };
-        fit(&m, d, &rows)
-            .and_then(|f| m.simulate(&f, &d.u, d.y))
-            .map_or(f64::INFINITY, |s| rows.iter().map(|&t| (s[t] - d.y[t]).powi(2)).sum())
+        fit(&m, d, &rows).and_then(|f| m.simulate(&f, &d.u, d.y).map(|s| (f, s))).map_or(
+            f64::INFINITY,
+            |(f, s)| {
+                let e: Vec<f64> = s.iter().zip(d.y).map(|(a, b)| a - b).collect();
+                rows.iter().map(|&t| whitened(&e, &f.noise, t).powi(2)).sum()
+            },
+        )
     };
     for i in 0..d.u.len() {
         let mut best = (f64::INFINITY, 1);
@@ -633,9 +705,9 @@ pub fn linear_orders(
             let orders = Orders { na, nb, nk: nk.clone() };
             let m = Model { element: &lin, input: 0, orders: orders.clone() };
             let Some(v) = cv_fit(&m, d, folds) else { continue };
-            // One more pole or tap must earn a tenth of a point.
-            let penalised = v.mean - 0.1 * (na + nb) as f64;
-            if best.as_ref().is_none_or(|b| penalised > b.1.mean - 0.1 * (b.0.na + b.0.nb) as f64) {
+            // One more pole or tap must earn a tenth of a point (of FIT, or of prediction gain).
+            let score = |v: &CvScore, o: &Orders| v.rank(base, d.noise_order) - 0.1 * (o.na + o.nb) as f64;
+            if best.as_ref().is_none_or(|b| score(&v, &orders) > score(&b.1, &b.0)) {
                 best = Some((orders, v));
             }
         }
@@ -660,18 +732,24 @@ mod tests {
         let s: Vec<f64> = (0..60).map(|t| (t / 20) as f64 * 10.0).collect();
         let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> =
             (0..3).map(|k| (Vec::new(), 20 * k..20 * (k + 1))).collect();
-        let score = nominal_cv_fit(&s, &y, &folds);
+        let score = nominal_cv_fit(&s, &y, &folds, 0);
         assert_eq!(score.blocks, vec![0.0, 0.0, 0.0]);
         assert_eq!(score.mean, 0.0);
         assert!(fit_pct(&y, &s) > 80.0);
-        let other = CvScore::of(vec![5.0, -2.0, 3.0]);
+        let other = CvScore::of(vec![5.0, -2.0, 3.0], vec![1.0, 3.0, 2.0]);
         assert_eq!(other.mean, 2.0);
         assert_eq!(other.min_gain_over(&score), -2.0);
         // A constant block has no FIT (−∞ for any error) and is left out.
         let mut flat = y.clone();
         flat[20..40].iter_mut().for_each(|v| *v = 10.0);
-        assert_eq!(nominal_cv_fit(&s, &flat, &folds).blocks, vec![0.0, 0.0]);
-        assert!(CvScore::of(Vec::new()).mean.is_nan());
+        assert_eq!(nominal_cv_fit(&s, &flat, &folds, 0).blocks, vec![0.0, 0.0]);
+        assert!(CvScore::of(Vec::new(), Vec::new()).mean.is_nan());
+        // The prediction currency: per block the share of the base's RMS removed, averaged
+        // (an output-error score's RMS is its simulation error's: ±1 about the levels here).
+        assert_eq!(score.prediction_rms, vec![1.0, 1.0, 1.0]);
+        let base = CvScore::of(vec![0.0; 3], vec![2.0, 4.0, 2.0]);
+        assert_eq!(other.prediction_gain_over(&base), (50.0 + 25.0 + 0.0) / 3.0);
+        assert!(CvScore::of(Vec::new(), Vec::new()).prediction_gain_over(&base).is_nan());
     }
 
     /// A closed loop: `x(t) = 0.9 x(t−1) + 0.2 u(t−1)` (pole 0.9, gain 2) measured with an AR(1)
@@ -758,7 +836,7 @@ mod tests {
         let d = Data { u: vec![&u], y: &u, train: 0..400, nominal: None, noise_order: 0 };
         let el = backlash::Backlash;
         let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
-        let f = Fitted { p: vec![0.4], theta: vec![0.8, 0.5, 0.0] };
+        let f = Fitted { p: vec![0.4], theta: vec![0.8, 0.5, 0.0], noise: vec![] };
         let c = m.curve(&f, &d, "u", "y").expect("backlash has a loop");
         assert_eq!(c.points.len(), 401);
         let (top, bottom) = (c.points[0].0, c.points[200].0);
