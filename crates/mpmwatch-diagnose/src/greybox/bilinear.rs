@@ -6,8 +6,13 @@
 
 use std::collections::BTreeMap;
 
+use mpmwatch_core::info::pearson;
+
 use super::{Data, Element, polynomial};
 use crate::candidates::{ActsOn, Physics};
+
+/// Largest correlation of the product with the square at which the product is still told apart.
+const IDENTIFIABLE_BELOW: f64 = 0.9;
 
 /// The inputs and `z(t)·z(t−1)`, `z` the input standardised about its training mean and held at
 /// its training range's edges as the polynomial's powers are (same parameters, kept by the
@@ -26,6 +31,17 @@ impl Element for Bilinear {
     }
     fn fixed(&self) -> usize {
         4
+    }
+    /// Only where the product carries a fifth of its variance beyond the square: correlation
+    /// below 0.9 between `z(t)·z(t−1)` and `z(t)²` on the training rows (1 − 0.9² = 0.19). On a
+    /// staircase or a slowly filtered input the two are one regressor, and a bilinear class would
+    /// only compete with the quadratic for the same fit; a dithered input moves every sample.
+    fn identifiable(&self, d: &Data<'_>, i: usize) -> bool {
+        let p = polynomial::centring_of(&d.u[i][d.train.clone()]);
+        let z: Vec<f64> = d.u[i][d.train.clone()].iter().map(|&v| polynomial::standardised(&p, v)).collect();
+        let prod: Vec<f64> = z.windows(2).map(|w| w[0] * w[1]).collect();
+        let sq: Vec<f64> = z[1..].iter().map(|v| v * v).collect();
+        pearson(&prod, &sq, 1.96).is_ok_and(|c| c.r.abs() < IDENTIFIABLE_BELOW)
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         let z: Vec<f64> = u[i].iter().map(|&v| polynomial::standardised(p, v)).collect();
@@ -59,5 +75,22 @@ mod tests {
         let sig = Bilinear.signals(&p, &[&u], 0);
         assert_eq!(sig[0], u.to_vec());
         assert_eq!(sig[1], vec![0.0, 0.0, z(2.0) * z(2.0), z(-1.0) * z(2.0)]);
+    }
+
+    /// A staircase held 20 samples per level: the product of successive samples is the square
+    /// but at one sample in twenty (correlation 0.92), so the class is not tried; a level held
+    /// for one sample each (a dither) leaves them apart. A constant input has no correlation and is not tried.
+    #[test]
+    fn the_product_must_differ_from_the_square() {
+        let levels = |hold: usize| -> Vec<f64> {
+            (0..1000).map(|t| ((t / hold * 7919) % 41) as f64 / 20.0 - 1.0).collect()
+        };
+        let (stairs, moving) = (levels(20), levels(1));
+        fn data(u: &[f64]) -> Data<'_> {
+            Data { u: vec![u], y: u, train: 0..1000, nominal: None, noise_order: 0 }
+        }
+        assert!(!Bilinear.identifiable(&data(&stairs), 0));
+        assert!(Bilinear.identifiable(&data(&moving), 0));
+        assert!(!Bilinear.identifiable(&data(&[1.0; 1000]), 0));
     }
 }

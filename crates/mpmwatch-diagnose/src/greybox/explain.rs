@@ -94,7 +94,7 @@ pub fn explain(
                 ActsOn::Input => flagged.to_vec(),
                 ActsOn::Output => flagged.iter().take(1).copied().collect(),
             };
-            for &i in &inputs {
+            for &i in inputs.iter().filter(|&&i| el.identifiable(d, i)) {
                 let m = Model { element: el.as_ref(), input: i, orders: orders.clone() };
                 let Some(v) = cv_fit(&m, d, folds) else { continue };
                 scored.push((v, k, i, complexity(el.as_ref(), d, i, orders), o));

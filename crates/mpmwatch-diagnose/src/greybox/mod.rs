@@ -114,6 +114,12 @@ pub trait Element: Sync {
     fn invertible(&self, _p: &[f64], _y: f64) -> bool {
         true
     }
+    /// Whether the record can tell this element on input `i` from the others at all (a
+    /// product of successive samples is the square on an input that barely moves between
+    /// samples); an element that cannot be told apart is not tried.
+    fn identifiable(&self, _d: &Data<'_>, _i: usize) -> bool {
+        true
+    }
     /// What stands in for `x` in the equation-error start when the output map loses
     /// information the recorded output cannot give back (a sign): one start per stand-in.
     /// Empty: the recorded output itself.
