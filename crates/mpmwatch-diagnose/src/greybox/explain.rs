@@ -30,6 +30,13 @@ use crate::report::{Finding, Tried};
 /// gains.
 pub const NONLINEAR_MARGIN: f64 = 1.0;
 
+/// The share of its final value a step response must pass to have moved. A re-fit from noisy
+/// data puts a small coefficient on every tap it is given, and one ahead of the true dead time
+/// would otherwise count as the response's start (a re-fitted extra sample of dead time read
+/// as a time constant); a path that carries a hundredth of the gain in its first sample is
+/// still a start.
+const FIRST_MOVE: f64 = 0.01;
+
 /// Points of cross-validated FIT within which the element with fewer parameters is preferred.
 pub const PARSIMONY: f64 = 0.5;
 
@@ -245,13 +252,14 @@ fn step(f: &Fitted, orders: &Orders, i: usize, n: usize) -> Vec<f64> {
     x
 }
 
-/// Samples from the first move to 63 % of the final value of a step response.
+/// The first move of a step response (the first sample beyond [`FIRST_MOVE`] of its final
+/// value) and the samples from it to 63 % of the final value.
 fn rise(step: &[f64]) -> (usize, f64) {
     let fin = step.last().copied().unwrap_or(0.0);
     if fin.abs() < 1e-300 {
         return (0, 1.0);
     }
-    let start = step.iter().position(|v| (v / fin).abs() > 1e-6).unwrap_or(0);
+    let start = step.iter().position(|v| (v / fin).abs() > FIRST_MOVE).unwrap_or(0);
     let t63 = step.iter().position(|v| v / fin >= 1.0 - (-1.0f64).exp()).unwrap_or(step.len() - 1);
     (start, (t63.saturating_sub(start) as f64).max(0.5))
 }
