@@ -1,8 +1,9 @@
-//! Grey-box hypotheses for open-loop records: each is a model structure, linear dynamics
-//! re-estimated from the record composed with one physics element where it acts (a static map
-//! on an input, a map on the output, a force fed back from the output), fitted by minimising
-//! the simulation error. A re-fitted linear model always competes: a physics element is named
-//! only when it beats the best linear structure out of sample.
+//! Grey-box hypotheses: each is a model structure, linear dynamics re-estimated from the record
+//! composed with one physics element where it acts (a static map on an input, a map on the
+//! output, a force fed back from the output), fitted by minimising the simulation error (open
+//! loop) or, on a dithered record, the one-step prediction error under an AR noise model
+//! (closed loop, [`Data::noise_order`]). A re-fitted linear model always competes: a physics
+//! element is named only when it beats the best linear structure out of sample.
 //!
 //! The structure of every hypothesis, with `w_s` the signals the element makes of the inputs
 //! (the inputs themselves for a linear model) and `f_m` the forces it feeds back:
@@ -16,8 +17,10 @@
 //! output stands in for `x` on the rows where the output map is invertible), then
 //! Levenberg–Marquardt (`levenberg-marquardt`) minimises the simulation error over every
 //! coefficient and the element's own parameters (a width, a limit), from each of the
-//! element's starting values. Choice (see [`explain`]): blocked cross-validation inside the
-//! training part, scored in simulation mode, the currency the held-out FIT is reported in.
+//! element's starting values, then on a dithered record the noise model's coefficients join
+//! the search. Choice (see [`explain`]): blocked cross-validation inside the training part,
+//! scored in simulation mode, the currency the held-out FIT is reported in (on a dithered
+//! record ranked by the cross-validated prediction error, gated by the simulation's FIT).
 
 mod abs_sensor;
 mod backlash;
@@ -415,7 +418,9 @@ impl Model<'_> {
 
 /// Fits a model on `rows` by simulation error: the equation-error start at each of the
 /// element's starting values, refined by Levenberg–Marquardt; the fit with the least
-/// simulation error on `rows` wins. `None` when no start gives a stable simulation.
+/// simulation error on `rows` wins; with a noise model (`d.noise_order` above 0) it is then
+/// refined by its prediction error ([`prediction_error_fit`]). `None` when no start gives a
+/// stable simulation.
 pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
     let mut starts = model.element.starts(d, model.input);
     if starts.is_empty() {
