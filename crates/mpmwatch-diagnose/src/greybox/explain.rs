@@ -12,6 +12,12 @@
 //!   worst block's.
 //!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
+//!
+//! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
+//! the parsimony are ranked instead by the cross-validated one-step prediction error
+//! ([`CvScore::rank`]): [`NONLINEAR_MARGIN`] and [`PARSIMONY`] then count points of prediction
+//! gain (percent of the nominal's prediction RMS), the same numbers not re-argued for that
+//! scale; the gate against the nominal stays the FIT's.
 
 use std::collections::BTreeMap;
 

@@ -58,8 +58,8 @@ pub struct Data<'a> {
     /// a start for what the recorded output cannot show (a direction).
     pub nominal: Option<&'a [f64]>,
     /// Order of the autoregressive noise model the fit assumes: 0 fits by simulation (output)
-    /// error, right in open loop; above 0 the simulation error is whitened by a fitted
-    /// `1 + c_1 q⁻¹ + … + c_p q⁻ᵖ` and the one-step prediction error minimised, which in a
+    /// error, right in open loop; above 0 the simulation error `e` is modelled as
+    /// `e(t) = Σ_k a_k e(t−k) + ε(t)` and the one-step prediction error `ε` minimised, which in a
     /// closed loop (inputs correlated with the disturbance through the controller) keeps the
     /// dynamics from absorbing the disturbance's colour (the direct prediction-error method).
     pub noise_order: usize,
@@ -538,7 +538,11 @@ fn prediction_error_fit(
         Some(used.iter().map(|&t| whitened(&e, &x[n_p + n_theta..], t)).collect())
     };
     let x0: Vec<f64> = free.iter().chain(&start.theta).chain(&ar).copied().collect();
-    let f = fitted(&minimize(&residual, &x0, used.len(), 1e3 * scale));
+    let x = minimize(&residual, &x0, used.len(), 1e3 * scale);
+    if x.iter().any(|v| !v.is_finite()) {
+        return start;
+    }
+    let f = fitted(&x);
     if model.simulate(&f, &d.u, d.y).is_some() { f } else { start }
 }
 
@@ -599,11 +603,13 @@ impl CvScore {
     /// with the disturbance's colour removed by each fit's noise model, is the currency the
     /// fits were made in and separates candidates by what they explain of the plant.
     pub fn prediction_gain_over(&self, base: &CvScore) -> f64 {
+        // A base that predicts a block perfectly leaves nothing to gain: 0 for a candidate as
+        // perfect, −∞ for any other (never NaN, which no comparison would rank).
         let g: Vec<f64> = self
             .prediction_rms
             .iter()
             .zip(&base.prediction_rms)
-            .map(|(a, b)| 100.0 * (1.0 - a / b))
+            .map(|(a, b)| 100.0 * (b - a) / b.max(f64::MIN_POSITIVE))
             .collect();
         if g.is_empty() { f64::NAN } else { g.iter().sum::<f64>() / g.len() as f64 }
     }
@@ -640,7 +646,20 @@ pub fn cv_fit(
         let f = fit(model, d, fit_rows)?;
         let s = model.simulate(&f, &d.u, d.y)?;
         blocks.push(fit_pct(&d.y[block.clone()], &s[block.clone()]));
-        rms.push(prediction_rms(&s, d.y, &f.noise, block.clone()));
+        // A fit whose prediction-error refinement gave up has no noise model; it is whitened
+        // as the nominal is, by an AR model of its error on the fit rows, so that every
+        // candidate is scored in one currency.
+        let noise = if f.noise.len() == d.noise_order {
+            f.noise.clone()
+        } else {
+            let e: Vec<f64> = s.iter().zip(d.y).map(|(a, b)| a - b).collect();
+            ar_fit(&e, fit_rows, d.noise_order)?
+        };
+        let r = prediction_rms(&s, d.y, &noise, block.clone());
+        if !r.is_finite() {
+            return None;
+        }
+        rms.push(r);
     }
     let score = CvScore::of(blocks, rms);
     score.mean.is_finite().then_some(score)
@@ -672,8 +691,9 @@ fn varies(y: &[f64]) -> bool {
 }
 
 /// The best linear orders by blocked cross-validation: dead times input by input, by the
-/// simulation error on the training rows (the same rows for every dead time) of a [`fit`] at
-/// two poles and two taps, then poles and taps by cross-validation. The dead time is judged on
+/// simulation error on the training rows (the same rows for every dead time; on a dithered
+/// record the one-step prediction error under the fit's noise model) of a [`fit`] at two poles
+/// and two taps, then poles and taps by cross-validation ([`CvScore::rank`] against `base`). The dead time is judged on
 /// a fit by simulation error, not on the equation-error fit alone, which coloured noise and a
 /// slow pole bias (docs/diagnose.md, "The dead-time search of the linear re-fit").
 pub fn linear_orders(
@@ -761,6 +781,12 @@ mod tests {
         let base = CvScore::of(vec![0.0; 3], vec![2.0, 4.0, 2.0]);
         assert_eq!(other.prediction_gain_over(&base), (50.0 + 25.0 + 0.0) / 3.0);
         assert!(CvScore::of(Vec::new(), Vec::new()).prediction_gain_over(&base).is_nan());
+        // A base that predicts perfectly: nothing to gain for a perfect candidate, an unbounded
+        // loss (−∞, which ranks last) for any other, never NaN.
+        let perfect = CvScore::of(vec![0.0], vec![0.0]);
+        assert_eq!(CvScore::of(vec![0.0], vec![0.0]).prediction_gain_over(&perfect), 0.0);
+        let worse = CvScore::of(vec![0.0], vec![1.0]).prediction_gain_over(&perfect);
+        assert_eq!(worse, f64::NEG_INFINITY);
     }
 
     /// A closed loop: `x(t) = 0.9 x(t−1) + 0.2 u(t−1)` (pole 0.9, gain 2) measured with an AR(1)
