@@ -454,8 +454,8 @@ mod tests {
             u[20..400].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
         let held: Vec<f64> =
             u.iter().enumerate().map(|(t, &v)| if t >= 400 { v.clamp(lo, hi) } else { v }).collect();
-        let ctx = crate::output_ctx(&[&u], &s, &s, &split);
-        let ctx_held = crate::output_ctx(&[&held], &s, &s, &split);
+        let ctx = crate::plan::output_ctx(&[&u], &s, &s, &split);
+        let ctx_held = crate::plan::output_ctx(&[&held], &s, &s, &split);
         for term in [Term::Quadratic, Term::Cubic] {
             let (a, b) = (ctx.columns(0, &term), ctx_held.columns(0, &term));
             let powers = a.len() - 1;

@@ -1,207 +1,173 @@
-//! A second locating statistic beside the MI matrix: the **dither-projection test**.
-//!
-//! The pairwise MI of one dither lag against the residual has little power against an effect
-//! that acts on the output (an |·| sensor, Coulomb friction or a spring fed back from the
-//! output) or that a whole filter of dither lags drives: such an effect depends on the dither
-//! through the plant's *output*, a sum over many dither lags, and each single lag carries only a
-//! small share of it (measured on the casebook: none of the two friction, the two |x| sensor, the
-//! output spring and the 3×3 saturation cases was flagged by the MI matrix).
-//!
-//! The test regresses the residual of output j on features that are functions of dither i
-//! alone: dither i at lags 0..=30, and the model's response to the *dither-driven part* of
-//! input i (its projection on the dithers, see [`super::dither_driven`]) raised to the second
-//! and third power, before and after the channel's dynamics. The statistic is the fraction of
-//! the (pre-whitened) residual's variance these features explain. Under the null hypothesis the
-//! residual is independent of the dithers — in a closed loop the disturbance reaches the inputs
-//! through feedback, but never the dithers — so the same statistic computed with the dithers
-//! circularly shifted (every dither by the same shift, which keeps their joint structure and
-//! each one's autocorrelation, and keeps the residual as it is) samples the null distribution
-//! exactly; features fitted on raw inputs would not have this property. The critical value is
-//! `μ + zσ` of the surrogate statistics.
-//!
-//! The choice of z: with p ≈ 37 features and a white residual, `n·R²` is close to χ²(p), whose
-//! mean is p and standard deviation √(2p) ≈ 8.6; μ + 4σ is then χ²(37) = 71.4, exceeded with
-//! probability 6·10⁻⁴, so a 3×3 plant's nine elements together raise a false alarm with
-//! probability below 0.6 % (Bonferroni). The χ² is right-skewed, so the Gaussian z = 4 would
-//! promise 3·10⁻⁵ per element; the χ² tail is the honest figure. The surrogates (not the χ²)
-//! set μ and σ, so an imperfectly whitened residual does not break the level.
-//!
-//! Pure and seeded: surrogate m of element (i, j) draws its shift from ChaCha8 stream
-//! `seed + 1000·j + i`, stream m.
+//! Where the mismatch is: which input→output channels, and with a physical model which state
+//! limits, the data implicate. Three tests, each against its own surrogates: the MI matrix of the
+//! excitations against the residuals ([`mpmwatch_core::detect::analyze`]), the dither-projection
+//! test ([`crate::projection`]) and, with a physical model, the state-limit test
+//! ([`crate::physical`]). Only what they flag is explained, so in a closed loop a
+//! disturbance-only change, which no dither carries, yields no finding.
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use mpmwatch_core::detect::{LagChoice, MatrixOptions, MatrixResult, Method, Signal};
+use mpmwatch_core::info::SurrogateOptions;
 
-use super::nominal::NominalArx;
-use mpmwatch_core::detect::ArWhitener;
-use mpmwatch_core::info::Threshold;
-use mpmwatch_core::info::{draw_shift, shift_bounds};
-use mpmwatch_core::numerics::{lagged as delayed, least_squares, minus_mean, r_squared};
+use crate::candidates::Term;
+use crate::error::DiagnoseError;
+use crate::input::{DiagnoseInput, DiagnoseOptions};
+use crate::nominal;
+use crate::physical::{self, LimitTest};
+use crate::plan::Plan;
+use crate::projection::{self, DrivenMap, ProjectionOptions, ProjectionTest};
+use crate::report::{ChannelReport, StateReport};
 
-/// Lags of the dither in the features (the same window as the dither-driven projection).
-pub const LAGS: usize = 30;
-
-/// Options of the projection test.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ProjectionOptions {
-    /// Surrogates per element.
-    pub surrogates: usize,
-    /// z of the critical value μ + zσ (see the module documentation for why 4).
-    pub z: f64,
-    /// Seed of the shifts.
-    pub seed: u64,
-    /// Largest AR order of the whitening model.
-    pub whiten: usize,
+/// What the locating tests found, per testable output (in the order of [`Plan::testable`]).
+pub(crate) struct Located {
+    /// The MI matrix on the training part (`None` when no output is testable).
+    pub matrix: Option<MatrixResult>,
+    /// The dither-projection test of every element.
+    pub projection: Vec<ProjectionTest>,
+    /// The state-limit test of each testable output (`None`: no physical model, or too few rows).
+    pub limit_tests: Vec<Option<LimitTest>>,
+    /// The state-limit tests, for the report.
+    pub states: Vec<StateReport>,
+    /// Every element's statistics, for the report.
+    pub channels: Vec<ChannelReport>,
 }
 
-impl Default for ProjectionOptions {
-    fn default() -> Self {
-        Self { surrogates: 40, z: 4.0, seed: 1, whiten: 10 }
+impl Located {
+    fn projection_of(&self, mv: usize, cv: usize) -> Option<&ProjectionTest> {
+        self.projection.iter().find(|p| p.input == mv && p.output == cv)
     }
-}
 
-/// The test of one element: dither `input` against the residual of `output`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ProjectionTest {
-    /// Input (dither) index.
-    pub input: usize,
-    /// Output index (into the outputs passed in).
-    pub output: usize,
-    /// Fraction of the whitened residual's variance explained by the features.
-    pub r2: f64,
-    /// Surrogate statistics of `r2`.
-    pub threshold: Threshold,
-    /// `r2` above the critical value.
-    pub significant: bool,
-    /// Number of feature columns.
-    pub features: usize,
-}
-
-/// How each input follows the dithers: least-squares coefficients on a constant and every
-/// dither at lags 0..=[`LAGS`] (in the order constant, dither 0 lags, dither 1 lags, …).
-#[derive(Debug, Clone, PartialEq)]
-pub struct DrivenMap {
-    coefs: Vec<Vec<f64>>,
-}
-
-impl DrivenMap {
-    /// Fits the map of every input on `rows`. An input whose fit fails maps to its mean.
-    pub fn fit(u: &[&[f64]], exc: &[&[f64]], rows: std::ops::Range<usize>) -> Self {
-        let ones = vec![1.0; exc.first().map_or(0, |e| e.len())];
-        let cols: Vec<Vec<f64>> = exc.iter().flat_map(|e| (0..=LAGS).map(|l| delayed(e, l))).collect();
-        let mut refs: Vec<&[f64]> = vec![&ones];
-        refs.extend(cols.iter().map(|c| c.as_slice()));
-        let coefs = u
-            .iter()
-            .map(|x| {
-                least_squares(&refs, x, rows.clone()).unwrap_or_else(|| {
-                    let mut c = vec![0.0; refs.len()];
-                    c[0] = x[rows.clone()].iter().sum::<f64>() / rows.len().max(1) as f64;
-                    c
-                })
+    /// The inputs of `inputs` whose element with testable output `cv` the MI matrix or the
+    /// projection test flags.
+    pub fn flagged(&self, cv: usize, inputs: usize) -> Vec<usize> {
+        let Some(m) = &self.matrix else { return Vec::new() };
+        (0..inputs)
+            .filter(|&i| {
+                m.cells.iter().any(|c| c.cv == cv && c.mv == i && c.significant)
+                    || self.projection_of(i, cv).is_some_and(|p| p.significant)
             })
-            .collect();
-        Self { coefs }
+            .collect()
     }
 
-    /// The dither-driven part of input `i` given (possibly shifted) dithers.
-    pub fn apply(&self, i: usize, exc: &[&[f64]]) -> Vec<f64> {
-        let n = exc.first().map_or(0, |e| e.len());
-        let c = &self.coefs[i];
-        let mut out = vec![c[0]; n];
-        for (k, e) in exc.iter().enumerate() {
-            for l in 0..=LAGS {
-                let b = c[1 + k * (LAGS + 1) + l];
-                if b == 0.0 {
-                    continue;
-                }
-                for t in 0..n {
-                    out[t] += b * if t >= l { e[t - l] } else { e[0] };
-                }
-            }
-        }
-        out
+    /// The state-limit test of testable output `cv` fired.
+    pub fn limits(&self, cv: usize) -> bool {
+        self.limit_tests[cv].as_ref().is_some_and(|t| t.significant)
+    }
+
+    /// Some test fired.
+    pub fn any(&self) -> bool {
+        self.matrix.as_ref().is_some_and(|m| m.mismatch)
+            || self.projection.iter().any(|p| p.significant)
+            || self.states.iter().any(|s| s.significant)
     }
 }
 
-/// The feature columns of element (i, ·): dither `d` at lags 0..=LAGS and, when the model has the
-/// channel, `G0(ud²)`, `G0(ud³)`, `s²`, `s³`, `G0(s³)` with `s = G0(ud)` (`ud` centred).
-fn features(d: &[f64], ud: &[f64], model: &NominalArx, i: usize, has_channel: bool) -> Vec<Vec<f64>> {
-    let mut z: Vec<Vec<f64>> = (0..=LAGS).map(|l| delayed(d, l)).collect();
-    if has_channel {
-        let uc = minus_mean(ud);
-        let sc = minus_mean(&model.channel(i, &uc));
-        let pow = |x: &[f64], p: i32| -> Vec<f64> { x.iter().map(|v| v.powi(p)).collect() };
-        z.push(model.channel(i, &pow(&uc, 2)));
-        z.push(model.channel(i, &pow(&uc, 3)));
-        z.push(pow(&sc, 2));
-        z.push(pow(&sc, 3));
-        z.push(model.channel(i, &pow(&sc, 3)));
-    }
-    z
-}
-
-/// Runs the test on every element. `exc`, `residuals` are the training part (length n); `rows`
-/// the rows analysed (after the warm-up); `models[j]`, `has_channel[j][i]` the nominal model of
-/// output j and whether it has channel i.
-pub fn projection_tests(
-    exc: &[&[f64]],
-    map: &DrivenMap,
-    residuals: &[&[f64]],
-    models: &[&NominalArx],
-    has_channel: &[Vec<bool>],
-    rows: std::ops::Range<usize>,
-    opts: &ProjectionOptions,
-) -> Vec<ProjectionTest> {
-    let n = exc.first().map_or(0, |e| e.len());
-    let start = rows.start.max(LAGS + 1);
-    let end = rows.end.min(n);
-    if end <= start + 200 {
-        return Vec::new();
-    }
-    // Whitening of each residual, applied to the features alike (generalised least squares).
-    let whiteners: Vec<ArWhitener> =
-        residuals.iter().map(|r| ArWhitener::fit(&r[start..end], opts.whiten)).collect();
-    let white_r: Vec<Vec<f64>> =
-        residuals.iter().zip(&whiteners).map(|(r, w)| w.apply(&r[start..end])).collect();
-    let stat = |exc_s: &[&[f64]], i: usize, j: usize| -> (f64, usize) {
-        let ud = map.apply(i, exc_s);
-        let cols: Vec<Vec<f64>> = features(exc_s[i], &ud, models[j], i, has_channel[j][i])
-            .into_iter()
-            .map(|c| whiteners[j].apply(&c[start..end]))
+/// Runs the locating tests on the training part.
+pub(crate) fn locate(
+    input: &DiagnoseInput<'_>,
+    opts: &DiagnoseOptions,
+    plan: &Plan<'_>,
+) -> Result<Located, DiagnoseError> {
+    let (n_train, split, residuals, testable, ctxs) =
+        (plan.n_train, &plan.split, &plan.residuals, &plan.testable, &plan.ctxs);
+    let matrix = if testable.is_empty() {
+        None
+    } else {
+        let d: Vec<Signal<'_>> =
+            plan.exc.iter().map(|e| Signal { name: e.name, values: &e.values[..n_train] }).collect();
+        let r: Vec<Signal<'_>> = testable
+            .iter()
+            .map(|&j| Signal { name: input.outputs[j].name, values: &residuals[j][..n_train] })
             .collect();
-        (r_squared(&white_r[j], &cols), cols.len())
+        // The diagnosis's localisation and its casebook were developed and measured under the
+        // paper's rule; it moves to the family rule with its own out-of-sample re-measurement.
+        let mo = MatrixOptions {
+            method: Method::Paper,
+            lags: LagChoice::Fixed(opts.lags),
+            surrogates: SurrogateOptions {
+                count: opts.surrogates,
+                seed: opts.seed,
+                ..SurrogateOptions::default()
+            },
+            ..MatrixOptions::default()
+        };
+        Some(mpmwatch_core::detect::analyze(&d, &r, &mo)?)
     };
-    let bounds = shift_bounds(n, LAGS, 1).ok();
-    let mut out = Vec::new();
-    for j in 0..residuals.len() {
-        for i in 0..exc.len() {
-            if mpmwatch_core::info::not_constant("dither", exc[i]).is_err() {
-                continue;
-            }
-            let (r2, p) = stat(exc, i, j);
-            let Some(b) = bounds else { continue };
-            let mut rng = ChaCha8Rng::seed_from_u64(opts.seed + 1000 * j as u64 + i as u64);
-            let sur: Vec<f64> = (0..opts.surrogates)
-                .map(|_| {
-                    let s = draw_shift(exc[i], b, &mut rng);
-                    let shifted: Vec<Vec<f64>> =
-                        exc.iter().map(|e| (0..n).map(|t| e[(t + s) % n]).collect()).collect();
-                    let refs: Vec<&[f64]> = shifted.iter().map(|v| v.as_slice()).collect();
-                    stat(&refs, i, j).0
-                })
-                .collect();
-            let threshold = Threshold::of(&sur, opts.z);
-            out.push(ProjectionTest {
-                input: i,
-                output: j,
-                r2,
-                significant: r2 > threshold.critical,
-                threshold,
-                features: p,
+    let mut limit_tests: Vec<Option<LimitTest>> = vec![None; testable.len()];
+    let mut states = Vec::new();
+    for (cv, &j) in testable.iter().enumerate() {
+        if input.physical.get(j).copied().flatten().is_none() {
+            continue;
+        }
+        let ctx = &ctxs[cv];
+        // The plan puts the limits first among a physical model's hypotheses.
+        let k = ctx.physical_terms.iter().take_while(|(t, _)| matches!(t, Term::StateLimit { .. })).count();
+        limit_tests[cv] = physical::limit_test(
+            &residuals[j],
+            &ctx.physical_terms[..k],
+            split.train.clone(),
+            ProjectionOptions::default().z,
+        );
+        if let Some(t) = &limit_tests[cv] {
+            states.push(StateReport {
+                output: input.outputs[j].name.to_string(),
+                states: ctx.state_names.clone(),
+                hypotheses: k,
+                r2: t.r2,
+                critical: t.threshold.critical,
+                significant: t.significant,
             });
         }
     }
-    out
+    let projection = if testable.is_empty() {
+        Vec::new()
+    } else {
+        let exc_tr: Vec<&[f64]> = plan.exc.iter().map(|e| &e.values[..n_train]).collect();
+        let u_tr: Vec<&[f64]> = plan.u_all.iter().map(|u| &u[..n_train]).collect();
+        let map = DrivenMap::fit(&u_tr, &exc_tr, split.train.clone());
+        let r_tr: Vec<&[f64]> = testable.iter().map(|&j| &residuals[j][..n_train]).collect();
+        let models: Vec<&nominal::NominalArx> = ctxs.iter().map(|c| &c.model).collect();
+        let has: Vec<Vec<bool>> = ctxs.iter().map(|c| c.has_channel.clone()).collect();
+        let po = ProjectionOptions { surrogates: opts.surrogates, seed: opts.seed, ..Default::default() };
+        projection::projection_tests(&exc_tr, &map, &r_tr, &models, &has, split.train.clone(), &po)
+    };
+    let mut located = Located { matrix, projection, limit_tests, states, channels: Vec::new() };
+    located.channels = channel_reports(input, testable, &located);
+    Ok(located)
+}
+
+/// Every element's statistics for the report: the MI norm against its critical value (the
+/// pairwise MI's, or the joint embedding's where only that was significant), the verdict, the
+/// CCF baseline and the projection test.
+fn channel_reports(input: &DiagnoseInput<'_>, testable: &[usize], located: &Located) -> Vec<ChannelReport> {
+    let Some(m) = &located.matrix else { return Vec::new() };
+    let proj = |mv: usize, cv: usize| located.projection_of(mv, cv);
+    let mut channels = Vec::new();
+    for c in &m.cells {
+        let j = testable[c.cv];
+        let bits = std::f64::consts::LN_2;
+        let (norm, thr) = if c.pairwise.significant || c.joint.is_none() {
+            (c.pairwise.norm, c.pairwise.threshold.critical)
+        } else {
+            let jt = c.joint.as_ref().map(|j| (j.norm, j.threshold.critical)).unwrap_or_default();
+            if c.significant { jt } else { (c.pairwise.norm, c.pairwise.threshold.critical) }
+        };
+        let verdict =
+            m.channels.iter().find(|ch| ch.mv_index == c.mv && ch.cv_index == c.cv).map(|ch| ch.verdict);
+        let p = proj(c.mv, c.cv);
+        channels.push(ChannelReport {
+            input: input.inputs[c.mv].name.to_string(),
+            output: input.outputs[j].name.to_string(),
+            norm_mi_bits: norm / bits,
+            threshold_bits: thr / bits,
+            significant: c.significant,
+            verdict: verdict
+                .and_then(|v| serde_json::to_value(v).ok().and_then(|v| v.as_str().map(str::to_string)))
+                .unwrap_or_default(),
+            ccf_significant: c.ccf.significant,
+            projection_r2: p.map_or(0.0, |p| p.r2),
+            projection_critical: p.map_or(0.0, |p| p.threshold.critical),
+            projection_significant: p.is_some_and(|p| p.significant),
+        });
+    }
+    channels
 }

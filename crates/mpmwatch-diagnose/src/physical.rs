@@ -17,7 +17,7 @@
 //! same statistic with the corrections circularly shifted against the residual (each correction
 //! is a function of the inputs alone, so in an open loop the shift samples independence of
 //! inputs and residual while both keep their autocorrelation). The critical value is `μ + zσ`
-//! of the surrogates, z = 4 as in [`super::locate`]. Open loop only: in a closed loop the inputs
+//! of the surrogates, z = 4 as in [`super::projection`]. Open loop only: in a closed loop the inputs
 //! carry the disturbance back and a shifted correction no longer samples the null.
 //!
 //! Pure and deterministic: the surrogates are every circular shift between a tenth and nine

@@ -64,7 +64,7 @@ pub struct ChannelReport {
     /// family-wise, Bonferroni, limit over the lag range).
     #[serde(default)]
     pub ccf_significant: bool,
-    /// The dither-projection test of this channel ([`super::locate`]): the fraction of the
+    /// The dither-projection test of this channel ([`super::projection`]): the fraction of the
     /// whitened residual's variance explained by functions of the dither.
     #[serde(default)]
     pub projection_r2: f64,

@@ -1,0 +1,213 @@
+//! What a diagnosis is given, and the checks that every signal, setting and physical model is
+//! usable before anything is fitted: a bad input is answered with an error naming it.
+
+use mpmwatch_core::detect::Signal;
+use mpmwatch_core::info::Lags;
+
+use crate::PhysicalModel;
+use crate::error::DiagnoseError;
+use crate::select::Scoring;
+
+/// The signals of one diagnosis, all on the time axis `time`.
+#[derive(Debug, Clone)]
+pub struct DiagnoseInput<'a> {
+    /// Time axis, seconds.
+    pub time: &'a [f64],
+    /// Recorded inputs (MVs).
+    pub inputs: Vec<Signal<'a>>,
+    /// The dithers added to each input, by position; `None`: the inputs are their own
+    /// excitation (open-loop records).
+    pub excitations: Option<Vec<Signal<'a>>>,
+    /// Recorded outputs.
+    pub outputs: Vec<Signal<'a>>,
+    /// The simulation of each output (same order), driven by the recorded inputs.
+    pub simulated: Vec<Signal<'a>>,
+    /// Per output (same order), the physical model behind its simulation when the caller has
+    /// one: limits on the model's states and the inputs' actuator gains are then stated by
+    /// re-running it ([`physical`]). Empty: none. Open-loop records only: `diagnose` refuses it
+    /// with excitations, but a record without excitations taken in a closed loop is the
+    /// caller's to keep out (the test's null assumes inputs independent of the residual).
+    pub physical: Vec<Option<&'a dyn PhysicalModel>>,
+}
+
+/// Options of a diagnosis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Fraction of the record held out at its end (default 0.3).
+    pub holdout_fraction: f64,
+    /// Surrogates per MI element (default 40).
+    pub surrogates: usize,
+    /// Seed of the surrogates (default 1).
+    pub seed: u64,
+    /// Lags of the MI profile (default 1..=15).
+    pub lags: Lags,
+    /// Multiplier of the BIC penalty per coefficient (default 1).
+    pub penalty: f64,
+    /// The honesty gate's margin (default 0.5): a finding is reported only when its correction
+    /// raises the plain FIT, refitted on two blocks of the training part and scored on the
+    /// third, by this many points on average, and lowers no block (on the physical-model path
+    /// in an open loop the average alone counts).
+    pub min_gain_pct: f64,
+    /// Samples skipped at the start of every fit (initial transients; default 20).
+    pub warmup: usize,
+    /// Closed loop: how hypotheses are scored (default: prediction error, [`Scoring`]).
+    pub scoring: Scoring,
+    /// Closed loop: explain the outputs the dithers' MI flags with the grey-box structures
+    /// instead of residual corrections, each fitted by its one-step prediction error under an
+    /// AR noise model and ranked by it out of sample (the honesty gate stays the plain FIT's).
+    /// Off by default: on the wide generator it names fewer cases right than the residual
+    /// corrections (docs/diagnose.md, "Closed loop, the grey-box path").
+    pub greybox_closed_loop: bool,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        Self {
+            holdout_fraction: 0.3,
+            surrogates: 40,
+            seed: 1,
+            lags: Lags { min: 1, max: 15 },
+            penalty: 1.0,
+            min_gain_pct: 0.5,
+            warmup: 20,
+            scoring: Scoring::default(),
+            greybox_closed_loop: false,
+        }
+    }
+}
+
+/// What the checks established.
+pub(crate) struct Checked<'a> {
+    /// The excitation of each input: the dithers, or the inputs themselves on an open-loop record.
+    pub exc: Vec<Signal<'a>>,
+    /// Samples in the training part (the rest is the held-out tail).
+    pub n_train: usize,
+    /// The sample time, seconds.
+    pub ts: f64,
+}
+
+/// Checks `input` and `opts` (lengths, finiteness, the time axis, the settings' ranges, each
+/// physical model against its simulation).
+pub(crate) fn validate<'a>(
+    input: &DiagnoseInput<'a>,
+    opts: &DiagnoseOptions,
+) -> Result<Checked<'a>, DiagnoseError> {
+    let n = input.time.len();
+    let time_sig = Signal { name: "time", values: input.time };
+    check(input.time, &time_sig)?;
+    if input.inputs.is_empty() || input.outputs.is_empty() {
+        return Err(DiagnoseError::invalid("signals", "at least one input and one output are needed"));
+    }
+    if input.simulated.len() != input.outputs.len() {
+        return Err(DiagnoseError::invalid(
+            "simulation",
+            format!(
+                "{} simulated outputs for {} recorded outputs",
+                input.simulated.len(),
+                input.outputs.len()
+            ),
+        ));
+    }
+    let exc = input.excitations.clone().unwrap_or_else(|| input.inputs.clone());
+    if exc.len() != input.inputs.len() {
+        return Err(DiagnoseError::invalid(
+            "--excitations",
+            format!("{} excitations for {} inputs (they pair by position)", exc.len(), input.inputs.len()),
+        ));
+    }
+    for s in input.inputs.iter().chain(&exc).chain(&input.outputs).chain(&input.simulated) {
+        check(input.time, s)?;
+    }
+    if !input.physical.is_empty() {
+        if input.physical.len() != input.outputs.len() {
+            return Err(DiagnoseError::invalid(
+                "physical models",
+                format!("{} entries for {} outputs", input.physical.len(), input.outputs.len()),
+            ));
+        }
+        if input.excitations.is_some() && input.physical.iter().any(Option::is_some) {
+            return Err(DiagnoseError::invalid(
+                "physical models",
+                "state limits are tested on open-loop records only (no excitations)",
+            ));
+        }
+        for (j, m) in input.physical.iter().enumerate() {
+            let Some(m) = m else { continue };
+            if m.inputs() != input.inputs.len() {
+                return Err(DiagnoseError::invalid(
+                    "physical models",
+                    format!(
+                        "the model of output {} takes {} inputs, the record has {}",
+                        input.outputs[j].name,
+                        m.inputs(),
+                        input.inputs.len()
+                    ),
+                ));
+            }
+            let sim = m.simulate();
+            let s = input.simulated[j].values;
+            let scale = 1.0 + s.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let gap = sim.iter().zip(s).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            if sim.len() != s.len() || gap > 1e-9 * scale {
+                return Err(DiagnoseError::invalid(
+                    "physical models",
+                    format!(
+                        "the model of output {} does not reproduce its simulation ({} samples, largest difference {gap:.3e})",
+                        input.outputs[j].name,
+                        sim.len()
+                    ),
+                ));
+            }
+        }
+    }
+    if !(0.05..=0.8).contains(&opts.holdout_fraction) {
+        return Err(DiagnoseError::invalid(
+            "holdout fraction",
+            format!("{} is not in [0.05, 0.8]", opts.holdout_fraction),
+        ));
+    }
+    if !(opts.min_gain_pct.is_finite() && (0.0..=100.0).contains(&opts.min_gain_pct)) {
+        return Err(DiagnoseError::invalid(
+            "minimum gain",
+            format!("{} points is not in [0, 100]", opts.min_gain_pct),
+        ));
+    }
+    let n_train = ((1.0 - opts.holdout_fraction) * n as f64).round() as usize;
+    if n_train < 200 + opts.warmup {
+        return Err(DiagnoseError::invalid(
+            "record",
+            format!("{n} samples leave {n_train} for training; at least {} are needed", 200 + opts.warmup),
+        ));
+    }
+    let ts = sample_time(input.time)?;
+
+    Ok(Checked { exc, n_train, ts })
+}
+
+fn check(time: &[f64], s: &Signal<'_>) -> Result<(), DiagnoseError> {
+    if s.values.len() != time.len() {
+        return Err(DiagnoseError::LengthMismatch {
+            name: s.name.to_string(),
+            found: s.values.len(),
+            reference: "time".into(),
+            expected: time.len(),
+        });
+    }
+    if let Some((index, &value)) = s.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(DiagnoseError::NotFinite { name: s.name.to_string(), index, value });
+    }
+    Ok(())
+}
+
+/// The median spacing of the time axis; it must increase strictly.
+fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {
+    if let Some(k) = time.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(DiagnoseError::invalid(
+            "time axis",
+            format!("time does not increase at row {} ({} then {})", k + 1, time[k], time[k + 1]),
+        ));
+    }
+    let mut d: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+    d.sort_by(f64::total_cmp);
+    Ok(d.get(d.len() / 2).copied().unwrap_or(1.0))
+}
