@@ -40,7 +40,7 @@ impl Element for Bilinear {
         let p = polynomial::centring_of(&d.u[i][d.train.clone()]);
         let z: Vec<f64> = d.u[i][d.train.clone()].iter().map(|&v| polynomial::standardised(&p, v)).collect();
         let prod: Vec<f64> = z.windows(2).map(|w| w[0] * w[1]).collect();
-        let sq: Vec<f64> = z[1..].iter().map(|v| v * v).collect();
+        let sq: Vec<f64> = z.iter().skip(1).map(|v| v * v).collect();
         pearson(&prod, &sq, 1.96).is_ok_and(|c| c.r.abs() < IDENTIFIABLE_BELOW)
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {

@@ -416,6 +416,20 @@ mod tests {
 
     /// A linear change is drawn as the two step responses: the model's (its own channel, as
     /// the finding compares) and the re-fit's, long enough for both to settle.
+    /// A re-fit puts a small coefficient on a tap ahead of the true dead time: a step that
+    /// carries 0.5 % of its final value there has not moved yet, one that carries 2 % has.
+    /// The rise counts from the first move to the first sample at 63 % of the final value.
+    #[test]
+    fn a_step_moves_at_one_percent_of_its_final_value() {
+        let late = [0.0, 0.005, 0.3, 0.6, 0.8, 0.9, 1.0];
+        assert_eq!(rise(&late), (2, 2.0));
+        let early = [0.0, 0.02, 0.3, 0.6, 0.8, 0.9, 1.0];
+        assert_eq!(rise(&early), (1, 3.0));
+        // A flat response has no move; its rise is half a sample, not zero.
+        assert_eq!(rise(&[0.0; 5]), (0, 1.0));
+        assert_eq!(rise(&[0.0, 0.0, 1.0]), (2, 0.5));
+    }
+
     #[test]
     fn a_linear_change_draws_both_step_responses() {
         // The model: y(t) = 0.8 y(t−1) + 0.2 u(t−1), unit gain, time constant about 4.5 samples.
