@@ -1,7 +1,9 @@
-//! Per output, from what the locating tests flagged to a finding: on an open-loop record (or
-//! on request in a closed loop) the grey-box structures of [`crate::greybox`], each a model
-//! re-fitted whole; otherwise corrections added to the residual ([`crate::select`],
-//! [`crate::decide`]), chosen by their one-step prediction error in a closed loop.
+//! Per output, from what the locating tests flagged to a finding. On an open-loop record
+//! without a physical model (or on request in a closed loop): the grey-box structures of
+//! [`crate::greybox`], each a model re-fitted whole, which also explain an open-loop output
+//! nothing flagged. Otherwise (a closed loop, or a physical model): corrections added to the
+//! residual of a flagged output ([`crate::select`]), chosen by their one-step prediction error in
+//! a closed loop and gated by [`crate::decide`].
 
 use crate::candidates::Physics;
 use crate::decide::decide;

@@ -1,7 +1,7 @@
 //! What a diagnosis is given, and the checks that every signal, setting and physical model is
 //! usable before anything is fitted: a bad input is answered with an error naming it.
 
-use mpmwatch_core::detect::Signal;
+use mpmwatch_core::detect::{Method, Signal};
 use mpmwatch_core::info::Lags;
 
 use crate::PhysicalModel;
@@ -24,7 +24,7 @@ pub struct DiagnoseInput<'a> {
     pub simulated: Vec<Signal<'a>>,
     /// Per output (same order), the physical model behind its simulation when the caller has
     /// one: limits on the model's states and the inputs' actuator gains are then stated by
-    /// re-running it ([`physical`]). Empty: none. Open-loop records only: `diagnose` refuses it
+    /// re-running it ([`crate::physical`]). Empty: none. Open-loop records only: `diagnose` refuses it
     /// with excitations, but a record without excitations taken in a closed loop is the
     /// caller's to keep out (the test's null assumes inputs independent of the residual).
     pub physical: Vec<Option<&'a dyn PhysicalModel>>,
@@ -58,6 +58,17 @@ pub struct DiagnoseOptions {
     /// Off by default: on the wide generator it names fewer cases right than the residual
     /// corrections (docs/diagnose.md, "Closed loop, the grey-box path").
     pub greybox_closed_loop: bool,
+    /// The MI matrix's decision rule in the locating step: [`Method::Family`] (default), one
+    /// family-wise test per element over the lags and the statistics (pairwise MI, joint-lag
+    /// MI, the cross-correlation) at a false-alarm rate of [`Self::alpha`] per record; or
+    /// [`Method::Paper`], the paper's 6σ per lag and per norm (the diagnosis's rule until stop
+    /// 32, about a one-in-a-billion test per lag, which left linear mismatches unflagged).
+    pub locate: Method,
+    /// Under [`Method::Family`]: the probability that a record whose every submodel is right
+    /// has some element flagged by the MI matrix (default 0.01), split evenly over its elements
+    /// (Bonferroni). The dither-projection test flags on its own besides (see
+    /// [`crate::projection`]).
+    pub alpha: f64,
 }
 
 impl Default for DiagnoseOptions {
@@ -72,6 +83,8 @@ impl Default for DiagnoseOptions {
             warmup: 20,
             scoring: Scoring::default(),
             greybox_closed_loop: false,
+            locate: Method::Family,
+            alpha: 0.01,
         }
     }
 }
@@ -172,6 +185,9 @@ pub(crate) fn validate<'a>(
             format!("{} points is not in [0, 100]", opts.min_gain_pct),
         ));
     }
+    if !(opts.alpha > 0.0 && opts.alpha < 1.0) {
+        return Err(DiagnoseError::invalid("alpha", format!("{} is not in (0, 1)", opts.alpha)));
+    }
     let n_train = ((1.0 - opts.holdout_fraction) * n as f64).round() as usize;
     if n_train < 200 + opts.warmup {
         return Err(DiagnoseError::invalid(
@@ -210,4 +226,36 @@ fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {
     let mut d: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     d.sort_by(f64::total_cmp);
     Ok(d.get(d.len() / 2).copied().unwrap_or(1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each setting out of its range is refused with an error naming it, before anything is
+    /// fitted.
+    #[test]
+    fn settings_out_of_range_are_named() {
+        let time: Vec<f64> = (0..400).map(f64::from).collect();
+        let x: Vec<f64> = (0..400).map(|t| f64::from(t % 7)).collect();
+        let sig = |name| Signal { name, values: &x };
+        let input = DiagnoseInput {
+            time: &time,
+            inputs: vec![sig("u1")],
+            excitations: None,
+            outputs: vec![sig("y1")],
+            simulated: vec![sig("y1")],
+            physical: Vec::new(),
+        };
+        assert!(validate(&input, &DiagnoseOptions::default()).is_ok());
+        for (opts, name) in [
+            (DiagnoseOptions { alpha: 0.0, ..Default::default() }, "alpha"),
+            (DiagnoseOptions { alpha: 1.0, ..Default::default() }, "alpha"),
+            (DiagnoseOptions { holdout_fraction: 0.9, ..Default::default() }, "holdout fraction"),
+            (DiagnoseOptions { min_gain_pct: f64::NAN, ..Default::default() }, "minimum gain"),
+        ] {
+            let message = validate(&input, &opts).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(message.contains(name), "{name}: {message}");
+        }
+    }
 }

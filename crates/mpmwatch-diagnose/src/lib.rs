@@ -3,28 +3,33 @@
 //! out (a fixed vocabulary, see [`Physics`]), fit it, and show the corrected simulation's FIT% on
 //! a held-out tail the fit never saw. Pure and synchronous: no files, no printing.
 //!
-//! [`diagnose`] reads as its three steps:
-//! 1. **plan** ([`plan`]): check the input, hold out the record's tail, split the training part
-//!    into three cross-validation folds, decide whether the loop is closed, and identify the
-//!    nominal model of every output from its simulation (noise-free, [`nominal`]) so every
-//!    hypothesis can be phrased against the model's own channel dynamics ([`candidates`]);
+//! [`diagnose`] reads as its three steps, then builds the report:
+//! 1. **plan** ([`plan`]): check the input ([`input`]), hold out the record's tail, split the
+//!    training part into three cross-validation folds, decide whether the loop is closed, and
+//!    identify the nominal model of every output from its simulation (noise-free, [`nominal`])
+//!    so every hypothesis can be phrased against the model's own channel dynamics
+//!    ([`candidates`]); with a physical model ([`PhysicalModel`], open loop only), its state
+//!    limits (an overflow) and the inputs' actuator gains are hypotheses too, each the model
+//!    re-run with it ([`physical`]);
 //! 2. **locate** ([`locate`]): the MI matrix of the excitations against the residuals
-//!    `r = y − s` on the training part, the dither-projection test ([`projection`]) and, with a
-//!    physical model, the state-limit test ([`physical`]); only what they flag is explained
-//!    (in a closed loop the inputs carry the disturbance back through feedback, and the dither,
+//!    `r = y − s` on the training part (the family rule at a stated false-alarm rate per
+//!    record, [`DiagnoseOptions::alpha`]), the dither-projection test ([`projection`]) and,
+//!    with a physical model, the state-limit test. In a closed loop only what they flag is
+//!    explained: the inputs carry the disturbance back through feedback, and the dither,
 //!    independent of the disturbance, is what says a channel is wrong at all, so a
-//!    disturbance-only change yields no finding);
-//! 3. **explain** ([`explain`]): per output, open loop: grey-box structures, each the nominal's
-//!    re-fitted linear dynamics with one physics element, fitted by simulation error and chosen
-//!    by blocked cross-validation against the best re-fitted linear model ([`greybox`]); closed
-//!    loop: corrections added to the residual, scored by one-step prediction error under an AR
-//!    noise model ([`select`]) and gated by their plain FIT gain ([`decide`]). The winner is
-//!    refitted on the whole training part and the corrected simulation ([`simulate`]) is scored
-//!    on the held-out tail.
-//!
-//! When the caller hands over the physical model behind a simulation ([`PhysicalModel`], open
-//! loop only), limits on the model's states (an overflow) and the inputs' actuator gains are
-//! hypotheses too, each the model re-run with it ([`physical`]).
+//!    disturbance-only change yields no finding;
+//! 3. **explain** ([`explain`]), per output. On an open-loop record without a physical model,
+//!    grey-box structures ([`greybox`]), each the nominal's re-fitted linear dynamics with one
+//!    physics element, fitted by simulation error and chosen by blocked cross-validation
+//!    against the best re-fitted linear model; an output nothing flagged is explained too and
+//!    kept only when a finding wins out of sample. Otherwise (a closed loop, or a physical
+//!    model) corrections added to the residual of a flagged output, fitted and chosen by
+//!    3-fold cross-validation with a BIC penalty (in a closed loop on the one-step prediction
+//!    error under an AR noise model, [`select`]); the winner must beat no correction and pass
+//!    the honesty gate on its plain FIT gain ([`decide`]). The grey-box path can be asked for
+//!    in a closed loop too ([`DiagnoseOptions::greybox_closed_loop`]). Every winner is
+//!    refitted on the whole training part and the corrected simulation ([`simulate`]) is
+//!    scored on the held-out tail.
 
 #![warn(missing_docs)]
 
@@ -55,6 +60,7 @@ pub use fitness::fit_pct;
 pub use greybox::{ElementCurve, FittedGreyBox, GreyBox, Structure};
 pub use input::{DiagnoseInput, DiagnoseOptions};
 pub use minimize::{minimize, minimize_from};
+pub use mpmwatch_core::detect::Method;
 pub use nominal::{NominalArx, identify as identify_nominal};
 pub use physical::{LEVEL_QUANTILES, PhysicalModel};
 pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
@@ -70,7 +76,8 @@ pub struct Diagnosis {
     pub report: DiagnosisReport,
     /// Corrected simulation per output (the nominal simulation where nothing was found).
     pub corrected: Vec<Vec<f64>>,
-    /// The MI matrix on the training part (`None` when every residual was exactly zero).
+    /// The MI matrix on the training part (`None` when no output is testable: every residual
+    /// is constant on the training part).
     pub matrix: Option<MatrixResult>,
     /// Per output, the named physics element's map when the grey-box step fitted one (a dead
     /// zone's input–output map, a friction force against motion), for a figure.

@@ -2,13 +2,13 @@
 //! limits, the data implicate. Three tests, each against its own surrogates: the MI matrix of the
 //! excitations against the residuals ([`mpmwatch_core::detect::analyze`]), the dither-projection
 //! test ([`crate::projection`]) and, with a physical model, the state-limit test
-//! ([`crate::physical`]). Only what they flag is explained, so in a closed loop a
-//! disturbance-only change, which no dither carries, yields no finding.
+//! ([`crate::physical`]). In a closed loop only what they flag is explained, so a
+//! disturbance-only change, which no dither carries, yields no finding (an open-loop record's
+//! grey-box step also explains what nothing flagged, see [`crate::explain`]).
 
-use mpmwatch_core::detect::{LagChoice, MatrixOptions, MatrixResult, Method, Signal};
+use mpmwatch_core::detect::{LagChoice, MatrixOptions, MatrixResult, Signal};
 use mpmwatch_core::info::SurrogateOptions;
 
-use crate::candidates::Term;
 use crate::error::DiagnoseError;
 use crate::input::{DiagnoseInput, DiagnoseOptions};
 use crate::nominal;
@@ -23,7 +23,8 @@ pub(crate) struct Located {
     pub matrix: Option<MatrixResult>,
     /// The dither-projection test of every element.
     pub projection: Vec<ProjectionTest>,
-    /// The state-limit test of each testable output (`None`: no physical model, or too few rows).
+    /// The state-limit test of each testable output (`None`: no physical model, no limit
+    /// hypothesis, too few rows, or a residual that whitens to zero).
     pub limit_tests: Vec<Option<LimitTest>>,
     /// The state-limit tests, for the report.
     pub states: Vec<StateReport>,
@@ -78,10 +79,9 @@ pub(crate) fn locate(
             .iter()
             .map(|&j| Signal { name: input.outputs[j].name, values: &residuals[j][..n_train] })
             .collect();
-        // The diagnosis's localisation and its casebook were developed and measured under the
-        // paper's rule; it moves to the family rule with its own out-of-sample re-measurement.
         let mo = MatrixOptions {
-            method: Method::Paper,
+            method: opts.locate,
+            alpha: opts.alpha / (plan.exc.len() * testable.len()) as f64,
             lags: LagChoice::Fixed(opts.lags),
             surrogates: SurrogateOptions {
                 count: opts.surrogates,
@@ -99,8 +99,7 @@ pub(crate) fn locate(
             continue;
         }
         let ctx = &ctxs[cv];
-        // The plan puts the limits first among a physical model's hypotheses.
-        let k = ctx.physical_terms.iter().take_while(|(t, _)| matches!(t, Term::StateLimit { .. })).count();
+        let k = plan.limits[cv];
         limit_tests[cv] = physical::limit_test(
             &residuals[j],
             &ctx.physical_terms[..k],

@@ -32,6 +32,9 @@ pub(crate) struct Plan<'a> {
     pub u_driven: Vec<Vec<f64>>,
     /// The context of each testable output, in the order of `testable`.
     pub ctxs: Vec<OutputCtx>,
+    /// Per testable output, how many of its context's physical hypotheses (at their head) are
+    /// state limits; the rest are actuator gains. Zero without a physical model.
+    pub limits: Vec<usize>,
 }
 
 /// Checks the input and lays out the diagnosis.
@@ -88,14 +91,16 @@ pub(crate) fn plan<'a>(input: &DiagnoseInput<'a>, opts: &DiagnoseOptions) -> Res
         .collect();
     // A physical model's limits and actuator gains are hypotheses stated by re-running it; its
     // simulation is the one handed in (checked), so it is the nominal.
+    let mut limits = vec![0; testable.len()];
     for (cv, &j) in testable.iter().enumerate() {
         let Some(m) = input.physical.get(j).copied().flatten() else { continue };
         let nominal = input.simulated[j].values;
         ctxs[cv].state_names = m.state_names();
         ctxs[cv].physical_terms = physical::limit_terms(m, nominal, split.train.clone());
+        limits[cv] = ctxs[cv].physical_terms.len();
         ctxs[cv].physical_terms.extend(physical::gain_terms(m, nominal));
     }
-    Ok(Plan { exc, n_train, ts, split, residuals, testable, u_all, u_driven, ctxs })
+    Ok(Plan { exc, n_train, ts, split, residuals, testable, u_all, u_driven, ctxs, limits })
 }
 
 /// Share of an input's variance that its excitations may leave unexplained before the loop

@@ -93,10 +93,11 @@ mod tests {
         assert_eq!(whitenable(&rows, 0), rows);
     }
 
-    /// An exact AR(2) series `e(t) = 1.2 e(t−1) − 0.5 e(t−2)` with garbage in an excluded
-    /// block: the least-squares AR(2) on the remaining rows recovers the coefficients exactly
-    /// (every equation it uses holds exactly), which it could not if a predecessor in the
-    /// excluded block entered a regression.
+    /// An exact AR(2) series `e(t) = 1.2 e(t−1) − 0.5 e(t−2)` with garbage (1000) in an
+    /// excluded block: the least-squares AR(2) on the remaining rows recovers the coefficients
+    /// exactly (every equation it uses holds exactly). The rows just after the block (150 and
+    /// 151) are rows, but their predecessors are garbage: were they used, two equations with
+    /// regressors near 1000 and targets below 1 would pull the fit far off.
     #[test]
     fn an_ar_fit_skips_an_excluded_block() {
         let n = 300;
@@ -111,8 +112,7 @@ mod tests {
                 1.2 * e[t - 1] - 0.5 * e[t - 2]
             };
         }
-        // The restarts break the recursion at their own rows; those rows (and a block of
-        // garbage) are excluded.
+        // A restart's own row does not follow the recursion, so it is excluded as an equation.
         for v in &mut e[100..150] {
             *v = 1e3;
         }
@@ -121,7 +121,8 @@ mod tests {
         assert!((a[0] - 1.2).abs() < 1e-9 && (a[1] + 0.5).abs() < 1e-9, "{a:?}");
         assert_eq!(ar_fit(&e, &rows, 0), Some(Vec::new()));
         assert_eq!(ar_fit(&e, &rows[..15], 2), None);
-        // The prediction error of the exact model is zero wherever it is defined.
+        // `whitened` is the one-step prediction error: zero under the exact model on every row
+        // it may use.
         for t in whitenable(&rows, 2) {
             assert!(whitened(&e, &a, t).abs() < 1e-9, "row {t}");
         }

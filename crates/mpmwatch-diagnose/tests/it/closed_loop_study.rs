@@ -4,7 +4,7 @@
 //! cargo test -p mpmwatch-diagnose --test it closed_loop_study -- --ignored --nocapture` prints
 //! one line per case and the rates (`VERBOSE=1` adds each case's draw).
 
-use mpmwatch_diagnose::{DiagnoseOptions, Physics, diagnose_numbered};
+use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered};
 use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
 
 #[test]
@@ -14,7 +14,15 @@ fn closed_loop_study() {
     let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
     let greybox = std::env::var_os("GREYBOX").is_some();
     let only = std::env::var("CASE").ok();
-    let opts = DiagnoseOptions { greybox_closed_loop: greybox, ..Default::default() };
+    // PAPER=1: localise with the paper's 6σ rule (the default until stop 32); ALPHA=a: the
+    // family rule's false-alarm rate per record.
+    let defaults = DiagnoseOptions::default();
+    let opts = DiagnoseOptions {
+        greybox_closed_loop: greybox,
+        locate: if std::env::var_os("PAPER").is_some() { Method::Paper } else { defaults.locate },
+        alpha: std::env::var("ALPHA").ok().and_then(|v| v.parse().ok()).unwrap_or(defaults.alpha),
+        ..defaults
+    };
     let (mut named, mut chan, mut total, mut alarms, mut nulls, mut fell) = (0, 0, 0, 0, 0, 0);
     let wide: Option<usize> = std::env::var("WIDE").ok().and_then(|v| v.parse().ok());
     let verbose = std::env::var_os("VERBOSE").is_some();

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use mpmwatch::report::figures::{XySeries, write_xy_chart};
-use mpmwatch_core::detect::Signal;
+use mpmwatch_core::detect::{Method, Signal};
 use mpmwatch_core::info::Lags;
 use mpmwatch_core::io::Table;
 use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Scoring, diagnose};
@@ -63,6 +63,16 @@ pub struct Args {
     /// held-back training data by at least this many points (never on the held-out tail).
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().min_gain_pct)]
     min_gain: f64,
+    /// How the MI matrix flags a channel. `family`: one test per element over every lag of
+    /// pairwise MI, joint-lag MI and the cross-correlation, at the false-alarm rate --alpha per
+    /// record. `paper`: the paper's μ + 6σ per statistic, which misses linear mismatches a
+    /// cross-correlation sees.
+    #[arg(long, default_value_t = DiagnoseOptions::default().locate, value_parser = super::choice::<Method>())]
+    method: Method,
+    /// Method `family`: the chance that a record whose every submodel is right has some channel
+    /// flagged by the MI matrix, split evenly over its channels.
+    #[arg(long, default_value_t = DiagnoseOptions::default().alpha)]
+    alpha: f64,
 }
 
 /// `--scoring` values (kept out of the library, which has no command-line types).
@@ -157,6 +167,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         lags: Lags::new(1, args.tmax)?,
         scoring: args.scoring.into(),
         min_gain_pct: args.min_gain,
+        locate: args.method,
+        alpha: args.alpha,
         ..DiagnoseOptions::default()
     };
     let dg = diagnose(&input, &opts)?;
