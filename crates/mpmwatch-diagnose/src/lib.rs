@@ -148,6 +148,12 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             }
             .to_string(),
             min_gain_pct: opts.min_gain_pct,
+            locate: match opts.locate {
+                Method::Family => "family",
+                Method::Paper => "paper",
+            }
+            .to_string(),
+            alpha: opts.alpha,
         }),
         states,
     };

@@ -152,4 +152,11 @@ pub struct Settings {
     /// finding to be reported.
     #[serde(default)]
     pub min_gain_pct: f64,
+    /// The MI matrix's decision rule in the locating step (`family` or `paper`; empty in a
+    /// report written before the rule was recorded).
+    #[serde(default)]
+    pub locate: String,
+    /// Under the `family` rule: the false-alarm rate per record, split evenly over its elements.
+    #[serde(default)]
+    pub alpha: f64,
 }
