@@ -128,9 +128,12 @@ enum Verb {
     Casebook(cmd::casebook::Args),
 }
 
-fn main() -> anyhow::Result<()> {
+/// Runs the verb; an error is printed with its causes, as anyhow prints it, but without a
+/// backtrace even where `RUST_BACKTRACE` is set: a user needs the bad input's name, not the
+/// call stack.
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    match cli.verb {
+    let result = match cli.verb {
         Verb::Mi(args) => cmd::mi::run(args),
         Verb::Bench(args) => cmd::bench::run(args),
         Verb::Analyze(args) => cmd::analyze::run(args),
@@ -141,5 +144,17 @@ fn main() -> anyhow::Result<()> {
         Verb::Loadgen(args) => cmd::loadgen::run(args),
         Verb::Diagnose(args) => cmd::diagnose::run(args),
         Verb::Casebook(args) => cmd::casebook::run(args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("Error: {e}");
+            let causes: Vec<String> = e.chain().skip(1).map(|c| c.to_string()).collect();
+            if !causes.is_empty() {
+                eprintln!("\nCaused by:");
+                causes.iter().for_each(|c| eprintln!("    {c}"));
+            }
+            std::process::ExitCode::FAILURE
+        }
     }
 }

@@ -196,13 +196,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if dg.report.findings.is_empty() {
+        let rule = match args.method {
+            Method::Family => format!("the family rule at a false-alarm rate of {} per record", args.alpha),
+            Method::Paper => "the paper's 6σ rule".to_string(),
+        };
         if args.excitations.is_empty() {
             println!(
-                "no mismatch found (no input's MI with the residual above its critical value, and no \
-                 hypothesis improved the cross-validated FIT by the margin)"
+                "no mismatch found (no input flagged by the MI matrix under {rule}, and no hypothesis \
+                 improved the cross-validated FIT by the margin)"
             );
         } else {
-            println!("no mismatch found (MI matrix all below its critical values)");
+            println!(
+                "no mismatch found (no channel flagged by the MI matrix under {rule}, nor by the \
+                 dither-projection test)"
+            );
         }
     }
     for (k, v) in &dg.report.holdout.fit_before_pct {

@@ -139,10 +139,14 @@ fn bad_input_names_the_culprit() {
             .arg(dir.join("r.json"))
             .arg("--corrected")
             .arg(dir.join("c.csv"))
+            .env("RUST_BACKTRACE", "1")
             .output()
             .unwrap();
         assert!(!out.status.success());
-        String::from_utf8_lossy(&out.stderr).to_string()
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        // The user gets the culprit's name, not the call stack, whatever RUST_BACKTRACE says.
+        assert!(!stderr.contains("backtrace"), "{stderr}");
+        stderr
     };
     let e = cli("u1", "y1", &simp);
     assert!(e.contains("time axes do not match") && e.contains("sim.csv"), "{e}");
