@@ -148,6 +148,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             }
             .to_string(),
             min_gain_pct: opts.min_gain_pct,
+            closed_loop_min_gain_pct: opts.closed_loop_min_gain_pct,
             locate: match opts.locate {
                 Method::Family => "family",
                 Method::Paper => "paper",

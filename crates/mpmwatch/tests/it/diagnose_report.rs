@@ -108,12 +108,13 @@ fn report_json_matches_design_4_5() {
     assert!(vocab.contains(&f["physics"].as_str().unwrap()), "{f}");
     assert!(["input", "output"].contains(&f["acts_on"].as_str().unwrap()));
     assert!(f["parameters"].as_object().unwrap().values().all(|p| p.is_f64()));
-    // `settings` records the options used, the locating rule among them.
+    // `settings` records the options used, the locating rule and both gate margins among them.
     let s = &v["settings"];
     assert_eq!(
         (s["locate"].as_str(), s["alpha"].as_f64(), s["seed"].as_u64()),
         (Some("family"), Some(0.01), Some(1))
     );
+    assert_eq!((s["min_gain_pct"].as_f64(), s["closed_loop_min_gain_pct"].as_f64()), (Some(0.5), Some(2.0)));
     let h = &v["holdout"];
     assert_eq!(h["start_index"], 1400);
     assert!(h["fit_before_pct"]["y1"].is_f64() && h["fit_after_pct"]["y1"].is_f64());
