@@ -360,6 +360,10 @@ pub fn play(u: &[f64], w: f64) -> Vec<f64> {
     out
 }
 
+/// Dead-zone widths and symmetric limits tried besides the quantiles of `|u − c|`, as fractions
+/// of its 95th percentile (see [`grid`]).
+const EVEN_WIDTHS: [f64; 5] = [0.2, 0.35, 0.5, 0.65, 0.8];
+
 /// The grid of concrete terms tried on input `i` of this output (bilinear excluded: its lags
 /// are chosen by FROLS in the fitter).
 pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term> {
@@ -389,11 +393,21 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     let mean = numerics::mean(u);
     let centres: Vec<f64> =
         [0.3, 0.4, 0.5, 0.6, 0.7].iter().map(|&q| quantile(u, q)).chain(std::iter::once(mean)).collect();
+    // Under a binary dither the distance from a centre, |u − c|, falls in two clusters, and its
+    // quantiles jump across the gap between them, where a dead zone's edge or a limit may well
+    // sit; widths spaced evenly up to the 95th percentile fill that gap.
+    let spread = |c: f64| -> Vec<f64> {
+        let dev: Vec<f64> = u.iter().map(|v| (v - c).abs()).collect();
+        let top = quantile(&dev, 0.95);
+        let mut w: Vec<f64> = [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8]
+            .iter()
+            .map(|&q| quantile(&dev, q))
+            .collect();
+        w.extend(EVEN_WIDTHS.iter().map(|f| f * top));
+        w
+    };
     for &centre in &centres {
-        let dev: Vec<f64> = u.iter().map(|v| (v - centre).abs()).collect();
-        for q in [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8] {
-            out.push(Term::DeadZone { centre, w: quantile(&dev, q) });
-        }
+        out.extend(spread(centre).into_iter().map(|w| Term::DeadZone { centre, w }));
     }
     for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
         out.push(Term::SaturationIn { lo: f64::NEG_INFINITY, hi: quantile(u, q) });
@@ -404,6 +418,10 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
         }
         out.push(Term::SaturationOut { lo: f64::NEG_INFINITY, hi: quantile(s, q) });
         out.push(Term::SaturationOut { lo: quantile(s, 1.0 - q), hi: f64::INFINITY });
+    }
+    for &c in centres[1..4].iter().chain([&mean]) {
+        let top = quantile(&u.iter().map(|v| (v - c).abs()).collect::<Vec<_>>(), 0.95);
+        out.extend(EVEN_WIDTHS.iter().map(|f| Term::SaturationIn { lo: c - f * top, hi: c + f * top }));
     }
     out.push(Term::Quadratic);
     out.push(Term::Cubic);
@@ -469,6 +487,38 @@ mod tests {
                 "{term:?}: the linear column should follow the input ({linear_gap})"
             );
         }
+    }
+
+    /// Under a binary input (two clusters at ±1, a small move on each) the quantiles of `|u − c|`
+    /// all sit near 1; the grid still offers dead-zone widths and symmetric limits inside the
+    /// gap between the clusters (0.2 to 0.8, away from both), where a limit of ±0.5 lies.
+    #[test]
+    fn binary_input_grid_reaches_into_the_gap() {
+        let n = 600;
+        let u: Vec<f64> = (0..n)
+            .map(
+                |t| if (t * 7919 / 13) % 2 == 0 { 1.0 } else { -1.0 } + 0.05 * ((t % 11) as f64 / 10.0 - 0.5),
+            )
+            .collect();
+        let s: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
+        let split = crate::select::Split {
+            features: None,
+            fit: 20..400,
+            train: 20..400,
+            folds: Vec::new(),
+            closed_loop: false,
+        };
+        let ctx = crate::plan::output_ctx(&[&u], &s, &s, &split);
+        let terms = grid(&ctx, 0, split.fit.clone());
+        let inside = |w: f64| (0.2..0.8).contains(&w);
+        assert!(
+            terms.iter().any(|t| matches!(t, Term::DeadZone { w, .. } if inside(*w))),
+            "no dead zone in the gap"
+        );
+        assert!(
+            terms.iter().any(|t| matches!(t, Term::SaturationIn { lo, hi } if inside((hi - lo) / 2.0))),
+            "no symmetric limit in the gap"
+        );
     }
 
     #[test]
