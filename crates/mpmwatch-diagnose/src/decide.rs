@@ -55,8 +55,8 @@ pub(crate) fn decide(
     // measures) on the training part's blocks by a margin on average, as on the grey-box path.
     // In a closed loop the margin is larger and no block is required to gain: there the plain
     // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
-    // so small average gains are noise, while a large one can still lose on the block that
-    // holds a disturbance step (docs/diagnose.md, "The closed loop's margin").
+    // so small average gains are noise, while large ones that lost on one block held up on the
+    // held-out tail (docs/diagnose.md, "The closed loop's margin").
     let margin = if split.closed_loop { opts.closed_loop_min_gain_pct } else { opts.min_gain_pct };
     let passes = |g: &CvGain| g.mean >= margin;
     let top_gain = top_gain.flatten();

@@ -43,15 +43,16 @@ pub struct DiagnoseOptions {
     pub lags: Lags,
     /// Multiplier of the BIC penalty per coefficient (default 1).
     pub penalty: f64,
-    /// The honesty gate's margin in an open loop (default 0.5): a finding is reported only when
-    /// its correction raises the plain FIT, refitted on two blocks of the training part and
-    /// scored on the third, by this many points on average.
+    /// The honesty gate's margin (default 0.5): a finding is reported only when its correction
+    /// raises the plain FIT, refitted on two blocks of the training part and scored on the
+    /// third, by this many points on average. Open-loop records, and the grey-box path in a
+    /// closed loop; the residual corrections of a closed loop use the next margin.
     pub min_gain_pct: f64,
     /// The honesty gate's margin on a dithered closed-loop record's residual corrections
-    /// (default 2.0 points on average). There the plain FIT is a weaker witness (feedback lets
-    /// a correction cancel part of the disturbance), so its cross-validated gain is noisier:
-    /// gains below 2 points fell on the held-out tail as often as they rose on the development
-    /// seeds (docs/diagnose.md, "The closed loop's margin").
+    /// (default 2.0 points on average, no condition on single blocks). There the plain FIT is a
+    /// weaker witness (feedback lets a correction cancel part of the disturbance), so its
+    /// cross-validated gain is noisier: of five development findings with 0.5 to 2 points, three
+    /// fell on the held-out tail (docs/diagnose.md, "The closed loop's margin").
     pub closed_loop_min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,

@@ -152,7 +152,8 @@ pub struct Settings {
     /// finding to be reported.
     #[serde(default)]
     pub min_gain_pct: f64,
-    /// The same margin for the residual corrections of a dithered closed-loop record.
+    /// The same margin for the residual corrections of a dithered closed-loop record (0 in a
+    /// report written before it was recorded).
     #[serde(default)]
     pub closed_loop_min_gain_pct: f64,
     /// The MI matrix's decision rule in the locating step (`family` or `paper`; empty in a

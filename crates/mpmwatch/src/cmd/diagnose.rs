@@ -65,8 +65,8 @@ pub struct Args {
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().min_gain_pct)]
     min_gain: f64,
     /// The honesty gate's margin on a closed-loop record (with --excitations), where feedback
-    /// makes the FIT gain noisier: on the development seeds, gains under 2 points fell on the
-    /// held-out tail as often as they rose.
+    /// makes the FIT gain noisier: of five development findings with 0.5 to 2 points, three
+    /// fell on the held-out tail.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().closed_loop_min_gain_pct)]
     closed_loop_min_gain: f64,
     /// How the MI matrix flags a channel. `family`: one test per element over every lag of
