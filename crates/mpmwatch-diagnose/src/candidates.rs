@@ -490,8 +490,9 @@ mod tests {
     }
 
     /// Under a binary input (two clusters at ±1, a small move on each) the quantiles of `|u − c|`
-    /// all sit near 1; the grid still offers dead-zone widths and symmetric limits inside the
-    /// gap between the clusters (0.2 to 0.8, away from both), where a limit of ±0.5 lies.
+    /// sit near 0 and 2 from a centre in one cluster and near 1 from the mean; the grid still
+    /// offers dead-zone widths and symmetric limits well inside the gap between the clusters
+    /// (0.2 to 0.8 from the mean), where an actuator limit of, say, ±0.5 would lie.
     #[test]
     fn binary_input_grid_reaches_into_the_gap() {
         let n = 600;

@@ -53,7 +53,7 @@ pub(crate) fn decide(
     let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
     // The honesty gate: the winner must also raise the plain FIT (what the held-out FIT
     // measures) on the training part's blocks by a margin on average, as on the grey-box path.
-    // In a closed loop the margin is larger and no block is required to gain: there the plain
+    // A closed loop has its own margin (larger by default) and no block is required to gain: there the plain
     // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
     // so small average gains are noise, while large ones that lost on one block held up on the
     // held-out tail (docs/diagnose.md, "The closed loop's margin").

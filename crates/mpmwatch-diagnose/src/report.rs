@@ -149,7 +149,7 @@ pub struct Settings {
     #[serde(default)]
     pub scoring: String,
     /// The honesty gate's margin: smallest FIT gain on held-back training data, in points, for a
-    /// finding to be reported.
+    /// finding to be reported (open loop, and the grey-box path in a closed loop).
     #[serde(default)]
     pub min_gain_pct: f64,
     /// The same margin for the residual corrections of a dithered closed-loop record (0 in a

@@ -77,9 +77,9 @@ pub struct Split {
     /// The whole training part (the final refit).
     pub train: std::ops::Range<usize>,
     /// Some input moves with more than its excitations (a controller acts on it): hypotheses
-    /// are then scored by prediction error, and the honesty gate also asks that no block's
-    /// plain FIT falls (see `decide`). False in open loop, and when the excitations given are
-    /// the inputs themselves.
+    /// are then scored by prediction error, and the honesty gate takes the closed loop's margin
+    /// (see `decide`). False in open loop, and when the excitations given are the inputs
+    /// themselves.
     pub closed_loop: bool,
 }
 

@@ -61,12 +61,13 @@ pub struct Args {
     scoring: ScoringArg,
     /// The honesty gate: a finding is reported only when its correction raises the FIT on
     /// held-back training data by at least this many points on average (never on the held-out
-    /// tail).
+    /// tail). Open-loop records; a closed loop takes --closed-loop-min-gain.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().min_gain_pct)]
     min_gain: f64,
-    /// The honesty gate's margin on a closed-loop record (with --excitations), where feedback
-    /// makes the FIT gain noisier: of five development findings with 0.5 to 2 points, three
-    /// fell on the held-out tail.
+    /// The honesty gate's margin, on average and with no condition on single blocks, on a
+    /// closed-loop record (--excitations given and an input moving with more than its
+    /// excitation), where feedback makes the FIT gain noisier: of five development findings
+    /// with 0.5 to 2 points, three fell on the held-out tail.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().closed_loop_min_gain_pct)]
     closed_loop_min_gain: f64,
     /// How the MI matrix flags a channel. `family`: one test per element over every lag of
