@@ -396,32 +396,29 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     // Under a binary dither the distance from a centre, |u − c|, falls in two clusters, and its
     // quantiles jump across the gap between them, where a dead zone's edge or a limit may well
     // sit; widths spaced evenly up to the 95th percentile fill that gap.
-    let spread = |c: f64| -> Vec<f64> {
-        let dev: Vec<f64> = u.iter().map(|v| (v - c).abs()).collect();
-        let top = quantile(&dev, 0.95);
-        let mut w: Vec<f64> = [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8]
-            .iter()
-            .map(|&q| quantile(&dev, q))
-            .collect();
-        w.extend(EVEN_WIDTHS.iter().map(|f| f * top));
-        w
-    };
-    for &centre in &centres {
-        out.extend(spread(centre).into_iter().map(|w| Term::DeadZone { centre, w }));
+    let dev: Vec<Vec<f64>> = centres.iter().map(|c| u.iter().map(|v| (v - c).abs()).collect()).collect();
+    for (&centre, d) in centres.iter().zip(&dev) {
+        let top = quantile(d, 0.95);
+        let quantiles =
+            [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7, 0.8].map(|q| quantile(d, q));
+        let evenly = EVEN_WIDTHS.map(|f| f * top);
+        out.extend(quantiles.into_iter().chain(evenly).map(|w| Term::DeadZone { centre, w }));
     }
+    // Symmetric limits about the middle three quantile centres and the mean.
+    let symmetric = [1, 2, 3, 5];
     for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
         out.push(Term::SaturationIn { lo: f64::NEG_INFINITY, hi: quantile(u, q) });
         out.push(Term::SaturationIn { lo: quantile(u, 1.0 - q), hi: f64::INFINITY });
-        for &c in centres[1..4].iter().chain([&mean]) {
-            let a = quantile(&u.iter().map(|v| (v - c).abs()).collect::<Vec<_>>(), q);
+        for &k in &symmetric {
+            let (c, a) = (centres[k], quantile(&dev[k], q));
             out.push(Term::SaturationIn { lo: c - a, hi: c + a });
         }
         out.push(Term::SaturationOut { lo: f64::NEG_INFINITY, hi: quantile(s, q) });
         out.push(Term::SaturationOut { lo: quantile(s, 1.0 - q), hi: f64::INFINITY });
     }
-    for &c in centres[1..4].iter().chain([&mean]) {
-        let top = quantile(&u.iter().map(|v| (v - c).abs()).collect::<Vec<_>>(), 0.95);
-        out.extend(EVEN_WIDTHS.iter().map(|f| Term::SaturationIn { lo: c - f * top, hi: c + f * top }));
+    for &k in &symmetric {
+        let (c, top) = (centres[k], quantile(&dev[k], 0.95));
+        out.extend(EVEN_WIDTHS.map(|f| Term::SaturationIn { lo: c - f * top, hi: c + f * top }));
     }
     out.push(Term::Quadratic);
     out.push(Term::Cubic);
