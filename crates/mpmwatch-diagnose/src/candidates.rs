@@ -464,6 +464,7 @@ mod tests {
             train: 20..400,
             folds: Vec::new(),
             closed_loop: false,
+            whiten: 0,
         };
         let (lo, hi) =
             u[20..400].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
@@ -505,6 +506,7 @@ mod tests {
             train: 20..400,
             folds: Vec::new(),
             closed_loop: false,
+            whiten: 0,
         };
         let ctx = crate::plan::output_ctx(&[&u], &s, &s, &split);
         let terms = grid(&ctx, 0, split.fit.clone());

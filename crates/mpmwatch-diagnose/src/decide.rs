@@ -64,9 +64,16 @@ pub(crate) fn decide(
     let out_name = input.outputs[j].name;
     if let Some(f) = best.and_then(|b| b.fitted.clone()) {
         // Refit the chosen hypothesis (its grid values fixed) on the whole training part.
-        let refit =
-            select::fit_term(ctx, inst, r, f.input, f.term.clone(), &split.train.clone().collect::<Vec<_>>())
-                .unwrap_or(f);
+        let refit = select::fit_term(
+            ctx,
+            inst,
+            r,
+            f.input,
+            f.term.clone(),
+            &split.train.clone().collect::<Vec<_>>(),
+            split.whiten,
+        )
+        .unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);
@@ -136,7 +143,7 @@ fn cv_gain(
 ) -> Option<CvGain> {
     let mut gains = Vec::with_capacity(split.folds.len());
     for (fit_rows, val) in &split.folds {
-        let g = select::fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows)?;
+        let g = select::fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows, split.whiten)?;
         let c = simulate::correction(ctx, &g)?;
         let yv = &y[val.clone()];
         let before: Vec<f64> = val.clone().map(|t| ctx.s[t]).collect();

@@ -51,6 +51,7 @@ mod projection;
 mod report;
 mod select;
 mod simulate;
+mod whiten;
 
 use std::collections::BTreeMap;
 

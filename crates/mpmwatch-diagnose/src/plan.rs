@@ -9,7 +9,7 @@ use mpmwatch_core::numerics::{lagged as delayed, least_squares, median};
 use crate::candidates::OutputCtx;
 use crate::error::DiagnoseError;
 use crate::input::{DiagnoseInput, DiagnoseOptions, validate};
-use crate::select::Split;
+use crate::select::{PREDICTION_ORDER, Scoring, Split};
 use crate::{nominal, physical};
 
 /// What every later step reads: the rows, the residuals and the contexts.
@@ -53,7 +53,9 @@ pub(crate) fn plan<'a>(input: &DiagnoseInput<'a>, opts: &DiagnoseOptions) -> Res
             (fit, edges[k]..edges[k + 1])
         })
         .collect();
-    let mut split = Split { features, fit: w0..n_fit, train: w0..n_train, folds, closed_loop: false };
+    // Scored by prediction error (dithers given): coefficients fitted under the same noise model.
+    let whiten = if features.is_some() && opts.scoring == Scoring::Prediction { PREDICTION_ORDER } else { 0 };
+    let mut split = Split { features, fit: w0..n_fit, train: w0..n_train, folds, closed_loop: false, whiten };
 
     let residuals: Vec<Vec<f64>> = input
         .outputs

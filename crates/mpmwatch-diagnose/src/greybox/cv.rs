@@ -3,9 +3,9 @@
 //! own mean, with the one-step prediction error under the fit's noise model beside it (the
 //! ranking currency on a dithered record); and the linear re-fit's orders chosen that way.
 
-use super::noise::{ar_fit, whitened};
 use super::{Data, Linear, Model, Orders, fit};
 use crate::fitness::fit_pct;
+use crate::whiten::{ar_fit, whitened};
 
 /// FIT% on each validation block of the folds, each block against its own mean as the held-out
 /// tail is scored, and their mean (the ranking score in open loop); with the RMS of the one-step
