@@ -7,6 +7,9 @@
 //! the dead-zoned input, so the correction is the model applied to the difference. Output-acting
 //! classes act on the simulated output (a clip, an |·| sensor) or feed it back through the
 //! channel (cubic stiffness, Coulomb friction), which makes the corrected simulation recursive.
+//! A fed-back force is built on the simulation, never on the recorded output: in a closed loop
+//! the recorded output is held near its setpoint and carries the disturbance, while the force
+//! acts on the plant's state, which the simulation follows.
 
 use serde::{Deserialize, Serialize};
 
@@ -117,13 +120,15 @@ pub enum Term {
     /// Cube of the input deviation through the channel, with square and linear terms (a cubic
     /// about a free centre).
     Cubic,
-    /// Cube of the output deviation fed back through the channel (a hardening spring).
+    /// Cube of the simulated output's deviation fed back through the channel (a hardening
+    /// spring).
     CubicOut,
     /// Products of lagged input deviations, the lags chosen by FROLS: `(input, lag, input, lag)`.
     Bilinear(Vec<(usize, usize, usize, usize)>),
     /// Play of total width `w`.
     Backlash(f64),
-    /// `sign(ŷ)` (velocity output) or `sign(Δŷ)` (position output) fed back through the channel.
+    /// `sign(x̂)` (velocity output) or `sign(Δx̂)` (position output) of the simulated state fed
+    /// back through the channel.
     Coulomb { on_change: bool },
     /// The sensor reads `|x − o| + o`.
     AbsSensor(f64),
@@ -222,8 +227,6 @@ pub struct OutputCtx {
     /// Per input, the range of `ut` over the training rows: the polynomial terms hold their
     /// powers at its edges (see [`OutputCtx::columns`]).
     pub u_range: Vec<(f64, f64)>,
-    /// Recorded output.
-    pub y: Vec<f64>,
     /// Nominal simulation of this output.
     pub s: Vec<f64>,
     /// Operating point of the output (median of the simulation over the training part).
@@ -243,7 +246,8 @@ pub struct OutputCtx {
 
 impl OutputCtx {
     /// The regressor columns of a non-recursive term on input `i` (the intercept is added by the
-    /// fitter). For a recursive term: its columns linearised at the recorded output.
+    /// fitter). For a recursive term: its columns linearised at the nominal simulation (the
+    /// first step of the recursion).
     pub fn columns(&self, i: usize, term: &Term) -> Vec<Vec<f64>> {
         let u = &self.ut[i];
         let g0 = |x: &[f64]| self.model.channel(i, x);
@@ -280,7 +284,7 @@ impl OutputCtx {
                 cols.push(self.s_channel[i].clone());
                 cols
             }
-            Term::CubicOut => vec![g0(&self.y.iter().map(|v| (v - self.y0).powi(3)).collect::<Vec<_>>())],
+            Term::CubicOut => vec![g0(&self.s.iter().map(|v| (v - self.y0).powi(3)).collect::<Vec<_>>())],
             Term::Bilinear(pairs) => pairs
                 .iter()
                 .map(|&(ia, la, ib, lb)| {
@@ -292,7 +296,7 @@ impl OutputCtx {
                 let p = play(u, *w);
                 vec![g0(&p.iter().zip(u).map(|(a, b)| a - b).collect::<Vec<_>>())]
             }
-            Term::Coulomb { on_change } => vec![g0(&coulomb_input(&self.y, *on_change))],
+            Term::Coulomb { on_change } => vec![g0(&coulomb_input(&self.s, *on_change))],
             Term::AbsSensor(o) => vec![self.s.iter().map(|v| (v - o).abs() + o - v).collect()],
             Term::StateLimit { .. } | Term::ModelGain { .. } => self
                 .physical_terms
@@ -470,8 +474,8 @@ mod tests {
             u[20..400].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
         let held: Vec<f64> =
             u.iter().enumerate().map(|(t, &v)| if t >= 400 { v.clamp(lo, hi) } else { v }).collect();
-        let ctx = crate::plan::output_ctx(&[&u], &s, &s, &split);
-        let ctx_held = crate::plan::output_ctx(&[&held], &s, &s, &split);
+        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
+        let ctx_held = crate::plan::output_ctx(&[&held], &s, &split);
         for term in [Term::Quadratic, Term::Cubic] {
             let (a, b) = (ctx.columns(0, &term), ctx_held.columns(0, &term));
             let powers = a.len() - 1;
@@ -508,7 +512,7 @@ mod tests {
             closed_loop: false,
             whiten: 0,
         };
-        let ctx = crate::plan::output_ctx(&[&u], &s, &s, &split);
+        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
         let terms = grid(&ctx, 0, split.fit.clone());
         let inside = |w: f64| (0.2..0.8).contains(&w);
         assert!(

@@ -87,10 +87,8 @@ pub(crate) fn plan<'a>(input: &DiagnoseInput<'a>, opts: &DiagnoseOptions) -> Res
             var(&rest) > CLOSED_LOOP_SHARE * var(u)
         });
     // The context (nominal model, channels) of every testable output.
-    let mut ctxs: Vec<OutputCtx> = testable
-        .iter()
-        .map(|&j| output_ctx(&u_all, input.outputs[j].values, input.simulated[j].values, &split))
-        .collect();
+    let mut ctxs: Vec<OutputCtx> =
+        testable.iter().map(|&j| output_ctx(&u_all, input.simulated[j].values, &split)).collect();
     // A physical model's limits and actuator gains are hypotheses stated by re-running it; its
     // simulation is the one handed in (checked), so it is the nominal.
     let mut limits = vec![0; testable.len()];
@@ -110,7 +108,7 @@ pub(crate) fn plan<'a>(input: &DiagnoseInput<'a>, opts: &DiagnoseOptions) -> Res
 const CLOSED_LOOP_SHARE: f64 = 1e-6;
 
 /// The context of one output: centred inputs, the identified nominal model and its channels.
-pub(crate) fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> OutputCtx {
+pub(crate) fn output_ctx(u: &[&[f64]], s: &[f64], split: &Split) -> OutputCtx {
     let model = nominal::identify(u, s, split.train.clone());
     let u0: Vec<f64> = u.iter().map(|x| median(&x[split.train.clone()])).collect();
     let ut: Vec<Vec<f64>> = u.iter().zip(&u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
@@ -131,7 +129,6 @@ pub(crate) fn output_ctx(u: &[&[f64]], y: &[f64], s: &[f64], split: &Split) -> O
         ut,
         u0,
         u_range,
-        y: y.to_vec(),
         s: s.to_vec(),
         model,
         has_channel,
@@ -216,5 +213,5 @@ pub(crate) fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCt
     for c in &s_channel {
         s.iter_mut().zip(c).for_each(|(a, b)| *a += b);
     }
-    OutputCtx { ut, s_channel, y: s.clone(), s, ..ctx.clone() }
+    OutputCtx { ut, s_channel, s, ..ctx.clone() }
 }

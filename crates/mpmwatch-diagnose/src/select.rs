@@ -163,7 +163,7 @@ pub fn fit_term(
         }
     }
     if f.term.is_recursive() {
-        // The linearised coefficient used the recorded output; refine its scale in simulation
+        // The linearised coefficient used the nominal simulation; refine its scale in simulation
         // mode on the same rows (a one-dimensional grid), re-centring the intercept each time.
         let base = f.coefs[0];
         let mut best: Option<(f64, FittedTerm)> = None;
@@ -518,7 +518,7 @@ mod tests {
                 closed_loop: false,
                 whiten: 0,
             };
-            let ctx = crate::plan::output_ctx(&[&u], &s, &s, &split);
+            let ctx = crate::plan::output_ctx(&[&u], &s, &split);
             let rows: Vec<usize> = (20..n).collect();
             let est = |p: usize| fit_term(&ctx, &ctx, &r, 0, Term::Gain, &rows, p).unwrap().coefs[0];
             let (e0, e8) = (est(0) - b, est(PREDICTION_ORDER) - b);
