@@ -9,7 +9,8 @@
 //! channel (cubic stiffness, Coulomb friction), which makes the corrected simulation recursive.
 //! A fed-back force is built on the simulation, never on the recorded output: in a closed loop
 //! the recorded output is held near its setpoint and carries the disturbance, while the force
-//! acts on the plant's state, which the simulation follows.
+//! acts on the plant's state, which the simulation follows. (The same holds on an open-loop
+//! record diagnosed with a physical model, which takes this path too.)
 
 use serde::{Deserialize, Serialize};
 
@@ -211,7 +212,56 @@ impl Term {
         )
     }
 
-    /// Whether the correction feeds back its own output (simulated step by step).
+    /// Its grid values that vary continuously (a dead zone's centre and half-width, a limit,
+    /// a play, a sensor's offset, a pole), in the order [`Term::with_continuous`] reads them;
+    /// empty for a term with none (a dead time is a whole number of samples).
+    pub fn continuous(&self) -> Vec<f64> {
+        match self {
+            Term::DeadZone { centre, w } => vec![*centre, *w],
+            Term::SaturationIn { lo, hi } | Term::SaturationOut { lo, hi } => {
+                [*lo, *hi].into_iter().filter(|v| v.is_finite()).collect()
+            }
+            Term::Backlash(w) => vec![*w],
+            Term::AbsSensor(o) => vec![*o],
+            Term::TimeConstant { p1, .. } => vec![*p1],
+            Term::MissingCoupling { pole, .. } => vec![*pole],
+            _ => Vec::new(),
+        }
+    }
+
+    /// The same term with its continuous grid values replaced by `x` (as [`Term::continuous`]
+    /// lists them); `None` where `x` leaves the values' domain (a negative width, crossed
+    /// limits, a pole outside [0, 1)).
+    pub fn with_continuous(&self, x: &[f64]) -> Option<Term> {
+        let t = match (self, x) {
+            (Term::DeadZone { .. }, &[centre, w]) if w >= 0.0 => Term::DeadZone { centre, w },
+            (Term::SaturationIn { lo, hi }, _) | (Term::SaturationOut { lo, hi }, _) => {
+                let mut it = x.iter().copied();
+                let lo = if lo.is_finite() { it.next()? } else { *lo };
+                let hi = if hi.is_finite() { it.next()? } else { *hi };
+                if lo >= hi {
+                    return None;
+                }
+                if matches!(self, Term::SaturationIn { .. }) {
+                    Term::SaturationIn { lo, hi }
+                } else {
+                    Term::SaturationOut { lo, hi }
+                }
+            }
+            (Term::Backlash(_), &[w]) if w >= 0.0 => Term::Backlash(w),
+            (Term::AbsSensor(_), &[o]) => Term::AbsSensor(o),
+            (Term::TimeConstant { p0, .. }, &[p1]) if (0.0..1.0).contains(&p1) => {
+                Term::TimeConstant { p0: *p0, p1 }
+            }
+            (Term::MissingCoupling { delay, .. }, &[pole]) if (0.0..1.0).contains(&pole) => {
+                Term::MissingCoupling { pole, delay: *delay }
+            }
+            _ => return None,
+        };
+        Some(t)
+    }
+
+    /// Whether the correction feeds back its own simulated state (simulated step by step).
     pub fn is_recursive(&self) -> bool {
         matches!(self, Term::CubicOut | Term::Coulomb { .. })
     }
@@ -331,11 +381,12 @@ impl OutputCtx {
     }
 }
 
-/// The input of the friction term: `sign(y)` for a velocity, `sign(y(t) − y(t−1))` for a position.
-pub fn coulomb_input(y: &[f64], on_change: bool) -> Vec<f64> {
-    (0..y.len())
+/// The input of the friction term on a simulated state `x`: `sign(x)` for a velocity,
+/// `sign(x(t) − x(t−1))` for a position.
+pub fn coulomb_input(x: &[f64], on_change: bool) -> Vec<f64> {
+    (0..x.len())
         .map(|t| {
-            let v = if on_change { if t > 0 { y[t] - y[t - 1] } else { 0.0 } } else { y[t] };
+            let v = if on_change { if t > 0 { x[t] - x[t - 1] } else { 0.0 } } else { x[t] };
             if v > 0.0 {
                 1.0
             } else if v < 0.0 {
@@ -448,6 +499,30 @@ fn first_order(b: Vec<f64>, pole: f64, x: &[f64]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every term with continuous grid values gives them back unchanged, and values outside
+    /// their domain (a negative width, crossed limits, a pole at 1) are refused.
+    #[test]
+    fn continuous_values_round_trip_and_keep_their_domain() {
+        let inf = f64::INFINITY;
+        for t in [
+            Term::DeadZone { centre: 0.1, w: 0.3 },
+            Term::SaturationIn { lo: -inf, hi: 0.5 },
+            Term::SaturationIn { lo: -0.2, hi: 0.5 },
+            Term::SaturationOut { lo: 0.1, hi: inf },
+            Term::Backlash(0.3),
+            Term::AbsSensor(-0.4),
+            Term::TimeConstant { p0: 0.8, p1: 0.9 },
+            Term::MissingCoupling { pole: 0.5, delay: 2 },
+        ] {
+            assert_eq!(t.with_continuous(&t.continuous()), Some(t.clone()));
+        }
+        assert!(Term::Gain.continuous().is_empty() && Term::DeadTime(3).continuous().is_empty());
+        assert_eq!(Term::DeadZone { centre: 0.0, w: 0.3 }.with_continuous(&[0.0, -0.1]), None);
+        assert_eq!(Term::SaturationIn { lo: -0.2, hi: 0.5 }.with_continuous(&[0.6, 0.5]), None);
+        assert_eq!(Term::TimeConstant { p0: 0.8, p1: 0.9 }.with_continuous(&[1.0]), None);
+        assert_eq!(Term::Backlash(0.3).with_continuous(&[0.3, 0.1]), None);
+    }
 
     /// The polynomial terms hold their powers beyond the training range: a record whose tail
     /// leaves that range gives the same power columns as the record with its tail held at the

@@ -40,7 +40,7 @@ pub(crate) fn decide(
             continue;
         }
         seen.push(ph);
-        let g = cv_gain(y, ctx, inst, r, f, split);
+        let g = cv_gain(y, ctx, inst, r, f, s.refined, split);
         top_gain.get_or_insert(g);
         if let Some(g) = g {
             tried.push(Tried {
@@ -62,18 +62,12 @@ pub(crate) fn decide(
     let top_gain = top_gain.flatten();
     let best = best.filter(|_| top_gain.is_some_and(|g| passes(&g)));
     let out_name = input.outputs[j].name;
-    if let Some(f) = best.and_then(|b| b.fitted.clone()) {
-        // Refit the chosen hypothesis (its grid values fixed) on the whole training part.
-        let refit = select::fit_term(
-            ctx,
-            inst,
-            r,
-            f.input,
-            f.term.clone(),
-            &split.train.clone().collect::<Vec<_>>(),
-            split.whiten,
-        )
-        .unwrap_or(f);
+    if let Some((f, refined)) = best.and_then(|b| b.fitted.clone().map(|f| (f, b.refined))) {
+        // Refit the chosen hypothesis on the whole training part (its grid values fixed, or
+        // refined again from them).
+        let refit =
+            select::fit(ctx, inst, r, &f, &split.train.clone().collect::<Vec<_>>(), split.whiten, refined)
+                .unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);
@@ -139,11 +133,12 @@ fn cv_gain(
     inst: &OutputCtx,
     r: &[f64],
     f: &simulate::FittedTerm,
+    refined: bool,
     split: &Split,
 ) -> Option<CvGain> {
     let mut gains = Vec::with_capacity(split.folds.len());
     for (fit_rows, val) in &split.folds {
-        let g = select::fit_term(ctx, inst, r, f.input, f.term.clone(), fit_rows, split.whiten)?;
+        let g = select::fit(ctx, inst, r, f, fit_rows, split.whiten, refined)?;
         let c = simulate::correction(ctx, &g)?;
         let yv = &y[val.clone()];
         let before: Vec<f64> = val.clone().map(|t| ctx.s[t]).collect();

@@ -121,7 +121,8 @@ pub fn describe(
             p.insert("cubic_stiffness".into(), -th);
             p.insert("centre".into(), ctx.y0);
             format!(
-                "a cubic restoring term is missing: {output} feeds back −{:.4}·({output} − {})³ into {input}'s channel (a hardening spring)",
+                "a cubic restoring term is missing: {output} as the model simulates it (before the fitted offset of {}) feeds back −{:.4}·({output} − {})³ into {input}'s channel (a hardening spring)",
+                fmt(f.intercept),
                 -th,
                 fmt(ctx.y0)
             )
@@ -154,9 +155,10 @@ pub fn describe(
         Term::Coulomb { on_change } => {
             p.insert("friction".into(), -th);
             format!(
-                "a constant force of {:.3} (in {input}'s units) opposes the {} of {output} (Coulomb friction)",
+                "a constant force of {:.3} (in {input}'s units) opposes the {} of {output} as the model simulates it, before the fitted offset of {} (Coulomb friction)",
                 -th,
-                if *on_change { "motion" } else { "sign" }
+                if *on_change { "motion" } else { "sign" },
+                fmt(f.intercept)
             )
         }
         Term::AbsSensor(o) => {

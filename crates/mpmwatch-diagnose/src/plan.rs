@@ -197,7 +197,7 @@ pub(crate) fn scoring_ctxs(ctx: &OutputCtx, u: &[&[f64]], u_driven: &[Vec<f64>])
 }
 
 /// The instrument context: `ctx` with the dither-driven inputs in place of the recorded ones,
-/// and the model's response to them in place of the simulated and recorded outputs.
+/// and the model's response to them in place of the simulated output.
 pub(crate) fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
     let ut: Vec<Vec<f64>> =
         u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();

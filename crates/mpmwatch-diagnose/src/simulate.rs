@@ -1,6 +1,7 @@
 //! The corrected simulation in simulation mode: the nominal simulation plus the fitted
-//! correction, computed from the recorded inputs and the corrected simulation's own past
-//! outputs only. The recorded outputs never enter (they only fit the coefficients).
+//! correction, computed from the recorded inputs and the corrected simulation's own past state
+//! (its output without the fitted intercept) only. The recorded outputs never enter (they only
+//! fit the coefficients).
 
 use super::candidates::{OutputCtx, Term};
 
@@ -88,7 +89,8 @@ mod tests {
     /// of the state a fed-back force acts on: on a simulation that crosses zero, a friction or
     /// spring correction with intercept 0.7 is the one with intercept 0 shifted by 0.7, sample
     /// for sample. Were the force read off the offset output, every sample whose simulated state
-    /// lies in (−0.7, 0) would flip the friction's sign and move the spring's cube.
+    /// lies in (−0.7, 0) would flip the friction's sign and move the spring's cube. The friction
+    /// on the state's change is a guard only: an offset cancels in a difference.
     #[test]
     fn the_intercept_does_not_move_the_state_a_force_acts_on() {
         let n = 400;
