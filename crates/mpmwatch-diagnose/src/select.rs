@@ -357,13 +357,7 @@ pub fn prediction_sse(
     let ones = vec![1.0; e.len()];
     let mut cols: Vec<&[f64]> = vec![&ones];
     cols.extend(lags.iter().map(|c| c.as_slice()));
-    let mut is_fit = vec![false; e.len()];
-    fit_rows.iter().filter(|&&t| t < e.len()).for_each(|&t| is_fit[t] = true);
-    let rows: Vec<usize> = fit_rows
-        .iter()
-        .copied()
-        .filter(|&t| t >= order && t < e.len() && is_fit[t - order..t].iter().all(|&f| f))
-        .collect();
+    let rows: Vec<usize> = whitenable(fit_rows, order).into_iter().filter(|&t| t < e.len()).collect();
     let th = least_squares_rows(&cols, e, &rows)?;
     let used: Vec<usize> = validate.filter(|&t| t >= order && t < e.len()).collect();
     let sse =

@@ -1,8 +1,10 @@
-//! The one whitening filter of the diagnosis: an AR model of an error series fitted by least
+//! The whitening filter of the diagnosis' fits: an AR model of an error series fitted by least
 //! squares, and the one-step prediction error it leaves. Used by the grey-box path's
-//! prediction-error fit and by the correction path's prefiltered coefficients. Every whitening
-//! uses only rows whose predecessors are rows too, so a validation block left out of a fit is
-//! never reached.
+//! prediction-error fit, by the correction path's prefiltered coefficients and refined grid
+//! values, and (its rows only) by the closed loop's fold score, whose AR model has a constant.
+//! The locating step whitens with core's `ArWhitener` instead (Yule–Walker on the training
+//! part of a residual). Every whitening here uses only rows whose predecessors are rows too, so a
+//! validation block left out of a fit is never reached.
 
 use mpmwatch_core::numerics::least_squares_rows;
 
