@@ -239,7 +239,7 @@ impl Term {
                 let mut it = x.iter().copied();
                 let lo = if lo.is_finite() { it.next()? } else { *lo };
                 let hi = if hi.is_finite() { it.next()? } else { *hi };
-                if lo >= hi {
+                if lo >= hi || it.next().is_some() {
                     return None;
                 }
                 if matches!(self, Term::SaturationIn { .. }) {
@@ -522,6 +522,8 @@ mod tests {
         assert_eq!(Term::SaturationIn { lo: -0.2, hi: 0.5 }.with_continuous(&[0.6, 0.5]), None);
         assert_eq!(Term::TimeConstant { p0: 0.8, p1: 0.9 }.with_continuous(&[1.0]), None);
         assert_eq!(Term::Backlash(0.3).with_continuous(&[0.3, 0.1]), None);
+        assert_eq!(Term::SaturationIn { lo: -inf, hi: 0.5 }.with_continuous(&[0.4, 0.6]), None);
+        assert_eq!(Term::MissingCoupling { pole: 0.5, delay: 2 }.with_continuous(&[1.0]), None);
     }
 
     /// The polynomial terms hold their powers beyond the training range: a record whose tail

@@ -40,7 +40,7 @@ pub(crate) fn decide(
             continue;
         }
         seen.push(ph);
-        let g = cv_gain(y, ctx, inst, r, f, s.refined, split);
+        let g = cv_gain(y, ctx, inst, r, f, s.grid.as_ref(), split);
         top_gain.get_or_insert(g);
         if let Some(g) = g {
             tried.push(Tried {
@@ -62,12 +62,12 @@ pub(crate) fn decide(
     let top_gain = top_gain.flatten();
     let best = best.filter(|_| top_gain.is_some_and(|g| passes(&g)));
     let out_name = input.outputs[j].name;
-    if let Some((f, refined)) = best.and_then(|b| b.fitted.clone().map(|f| (f, b.refined))) {
+    if let Some((f, grid)) = best.and_then(|b| b.fitted.clone().map(|f| (f, b.grid.clone()))) {
         // Refit the chosen hypothesis on the whole training part (its grid values fixed, or
-        // refined again from them).
+        // refined afresh from its grid term).
+        let train: Vec<usize> = split.train.clone().collect();
         let refit =
-            select::fit(ctx, inst, r, &f, &split.train.clone().collect::<Vec<_>>(), split.whiten, refined)
-                .unwrap_or(f);
+            select::fit_hypothesis(ctx, inst, r, &f, grid.as_ref(), &train, split.whiten).unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);
@@ -133,12 +133,12 @@ fn cv_gain(
     inst: &OutputCtx,
     r: &[f64],
     f: &simulate::FittedTerm,
-    refined: bool,
+    grid: Option<&crate::candidates::Term>,
     split: &Split,
 ) -> Option<CvGain> {
     let mut gains = Vec::with_capacity(split.folds.len());
     for (fit_rows, val) in &split.folds {
-        let g = select::fit(ctx, inst, r, f, fit_rows, split.whiten, refined)?;
+        let g = select::fit_hypothesis(ctx, inst, r, f, grid, fit_rows, split.whiten)?;
         let c = simulate::correction(ctx, &g)?;
         let yv = &y[val.clone()];
         let before: Vec<f64> = val.clone().map(|t| ctx.s[t]).collect();
