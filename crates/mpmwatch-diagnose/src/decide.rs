@@ -67,7 +67,7 @@ pub(crate) fn decide(
         // refined afresh from its grid term).
         let train: Vec<usize> = split.train.clone().collect();
         let refit =
-            select::fit_hypothesis(ctx, inst, r, &f, grid.as_ref(), &train, split.whiten).unwrap_or(f);
+            crate::fit::fit_hypothesis(ctx, inst, r, &f, grid.as_ref(), &train, split.whiten).unwrap_or(f);
         if let Some(c) = simulate::correction(ctx, &refit) {
             let in_name = input.inputs[refit.input].name;
             let (summary, parameters) = describe::describe(ctx, &refit, in_name, out_name, ts);
@@ -138,7 +138,7 @@ fn cv_gain(
 ) -> Option<CvGain> {
     let mut gains = Vec::with_capacity(split.folds.len());
     for (fit_rows, val) in &split.folds {
-        let g = select::fit_hypothesis(ctx, inst, r, f, grid, fit_rows, split.whiten)?;
+        let g = crate::fit::fit_hypothesis(ctx, inst, r, f, grid, fit_rows, split.whiten)?;
         let c = simulate::correction(ctx, &g)?;
         let yv = &y[val.clone()];
         let before: Vec<f64> = val.clone().map(|t| ctx.s[t]).collect();

@@ -38,6 +38,7 @@ mod decide;
 mod describe;
 mod error;
 mod explain;
+mod fit;
 mod fitness;
 mod frols;
 mod greybox;
