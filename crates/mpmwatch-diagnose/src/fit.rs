@@ -221,7 +221,7 @@ fn centre_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::select::{PREDICTION_ORDER, Split};
+    use crate::select::PREDICTION_ORDER;
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
@@ -241,7 +241,8 @@ mod tests {
         for seed in 1..=20u64 {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
             let u: Vec<f64> = (0..n).map(|_| StandardNormal.sample(&mut rng)).collect();
-            let s: Vec<f64> = (0..n).map(|t| if t > 0 { u[t - 1] } else { 0.0 }).collect();
+            let ctx = crate::plan::delay_ctx(&u, 1.0);
+            let s = &ctx.s;
             let mut v = 0.0;
             let r: Vec<f64> = s
                 .iter()
@@ -251,15 +252,6 @@ mod tests {
                     b * x + v
                 })
                 .collect();
-            let split = Split {
-                features: None,
-                fit: 20..n,
-                train: 20..n,
-                folds: Vec::new(),
-                closed_loop: false,
-                whiten: 0,
-            };
-            let ctx = crate::plan::output_ctx(&[&u], &s, &split);
             let rows: Vec<usize> = (20..n).collect();
             let est = |p: usize| fit_term(&ctx, &ctx, &r, 0, Term::Gain, &rows, p).unwrap().coefs[0];
             let (e0, e8) = (est(0) - b, est(PREDICTION_ORDER) - b);
@@ -287,7 +279,8 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let mut draw = || -> f64 { StandardNormal.sample(&mut rng) };
         let u: Vec<f64> = (0..n).map(|_| draw()).collect();
-        let s: Vec<f64> = (0..n).map(|t| if t > 0 { u[t - 1] } else { 0.0 }).collect();
+        let ctx = crate::plan::delay_ctx(&u, 1.0);
+        let s = &ctx.s;
         let ud: Vec<f64> = u.iter().map(|v| 0.7 * v + 0.3 * draw()).collect();
         let mut v = 0.0;
         let r: Vec<f64> = s
@@ -297,15 +290,6 @@ mod tests {
                 0.4 * x + v + 0.2
             })
             .collect();
-        let split = Split {
-            features: None,
-            fit: 20..n,
-            train: 20..n,
-            folds: Vec::new(),
-            closed_loop: false,
-            whiten: 0,
-        };
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
         let inst = crate::plan::instrument_ctx(&ctx, &[ud]);
         let rows: Vec<usize> = (20..500).chain(700..n).collect();
         let col = ctx.columns(0, &Term::Gain).remove(0);
@@ -342,16 +326,7 @@ mod tests {
         let n = 1500;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
         let u: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let s: Vec<f64> = (0..n).map(|t| if t > 0 { u[t - 1] } else { 0.0 }).collect();
-        let split = Split {
-            features: None,
-            fit: 20..n,
-            train: 20..n,
-            folds: Vec::new(),
-            closed_loop: false,
-            whiten: 0,
-        };
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
+        let ctx = crate::plan::delay_ctx(&u, 1.0);
         let r = ctx.columns(0, &Term::DeadZone { centre: 0.1, w: 0.3 }).remove(0);
         let rows: Vec<usize> = (20..n).collect();
         let f = refine(&ctx, &ctx, &r, 0, &Term::DeadZone { centre: 0.0, w: 0.25 }, &rows, 0).unwrap();
@@ -371,16 +346,7 @@ mod tests {
         let n = 1500;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let u: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let s: Vec<f64> = (0..n).map(|t| if t > 0 { u[t - 1] } else { 0.0 }).collect();
-        let split = Split {
-            features: None,
-            fit: 20..n,
-            train: 20..n,
-            folds: Vec::new(),
-            closed_loop: false,
-            whiten: 0,
-        };
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
+        let ctx = crate::plan::delay_ctx(&u, 1.0);
         let effect = ctx.columns(0, &Term::DeadZone { centre: 0.1, w: 0.3 }).remove(0);
         let mut v = 0.0;
         let r: Vec<f64> = effect

@@ -83,7 +83,6 @@ fn recursive(ctx: &OutputCtx, f: &FittedTerm) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::select::Split;
 
     /// The intercept is an offset of the output (in a closed loop, the disturbance's level), not
     /// of the state a fed-back force acts on: on a simulation that crosses zero, a friction or
@@ -95,16 +94,7 @@ mod tests {
     fn the_intercept_does_not_move_the_state_a_force_acts_on() {
         let n = 400;
         let u: Vec<f64> = (0..n).map(|t| (0.05 * t as f64).sin()).collect();
-        let s: Vec<f64> = (0..n).map(|t| if t > 0 { 0.5 * u[t - 1] } else { 0.0 }).collect();
-        let split = Split {
-            features: None,
-            fit: 20..n,
-            train: 20..n,
-            folds: Vec::new(),
-            closed_loop: false,
-            whiten: 0,
-        };
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
+        let ctx = crate::plan::delay_ctx(&u, 0.5);
         for term in [Term::Coulomb { on_change: false }, Term::Coulomb { on_change: true }, Term::CubicOut] {
             let f = |intercept| FittedTerm { input: 0, term: term.clone(), intercept, coefs: vec![-0.2] };
             let c0 = correction(&ctx, &f(0.0)).unwrap();
