@@ -459,8 +459,16 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
         let evenly = EVEN_WIDTHS.map(|f| f * top);
         out.extend(quantiles.into_iter().chain(evenly).map(|w| Term::DeadZone { centre, w }));
     }
-    // Symmetric limits about the middle three quantile centres and the mean.
+    // Symmetric limits about the middle three quantile centres and the mean, down to a tenth
+    // of `|u − c|`'s distribution: an actuator that spends most of the record at its limits (a
+    // strongly saturated one) passes only its smallest moves.
     let symmetric = [1, 2, 3, 5];
+    for q in [0.1, 0.2, 0.3, 0.4] {
+        for &k in &symmetric {
+            let (c, a) = (centres[k], quantile(&dev[k], q));
+            out.push(Term::SaturationIn { lo: c - a, hi: c + a });
+        }
+    }
     for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
         out.push(Term::SaturationIn { lo: f64::NEG_INFINITY, hi: quantile(u, q) });
         out.push(Term::SaturationIn { lo: quantile(u, 1.0 - q), hi: f64::INFINITY });
@@ -581,16 +589,8 @@ mod tests {
             )
             .collect();
         let s: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
-        let split = crate::select::Split {
-            features: None,
-            fit: 20..400,
-            train: 20..400,
-            folds: Vec::new(),
-            closed_loop: false,
-            whiten: 0,
-        };
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split);
-        let terms = grid(&ctx, 0, split.fit.clone());
+        let ctx = crate::plan::output_ctx(&[&u], &s, &split_on(20..400));
+        let terms = grid(&ctx, 0, 20..400);
         let inside = |w: f64| (0.2..0.8).contains(&w);
         assert!(
             terms.iter().any(|t| matches!(t, Term::DeadZone { w, .. } if inside(*w))),
@@ -600,6 +600,36 @@ mod tests {
             terms.iter().any(|t| matches!(t, Term::SaturationIn { lo, hi } if inside((hi - lo) / 2.0))),
             "no symmetric limit in the gap"
         );
+    }
+
+    /// An actuator that clips most of its moves: under a uniform input on [−1, 1] a limit of
+    /// ±0.1 passes a tenth of the samples. The grid offers a symmetric limit there (the tenth
+    /// quantile of `|u − c|`); its evenly spaced limits start at 0.2 of the 95th percentile (0.19).
+    #[test]
+    fn grid_offers_limits_that_clip_most_moves() {
+        let n = 1000;
+        let u: Vec<f64> = (0..n).map(|t| ((t * 7919) % n) as f64 / n as f64 * 2.0 - 1.0).collect();
+        let s: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
+        let ctx = crate::plan::output_ctx(&[&u], &s, &split_on(0..n));
+        let terms = grid(&ctx, 0, 0..n);
+        assert!(
+            terms.iter().any(
+                |t| matches!(t, Term::SaturationIn { lo, hi } if (0.05..0.15).contains(&((hi - lo) / 2.0)))
+            ),
+            "no symmetric limit clipping nine moves in ten"
+        );
+    }
+
+    /// An open-loop split that fits and trains on `rows`, with no folds.
+    fn split_on(rows: std::ops::Range<usize>) -> crate::select::Split {
+        crate::select::Split {
+            features: None,
+            fit: rows.clone(),
+            train: rows,
+            folds: Vec::new(),
+            closed_loop: false,
+            whiten: 0,
+        }
     }
 
     #[test]
