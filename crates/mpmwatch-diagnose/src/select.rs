@@ -245,19 +245,10 @@ pub fn rank(
     }
     // An output-side effect (a sensor map, an output clip, a force fed back from the output) is a
     // property of the output, not of one channel: it is tried once, through the flagged input
-    // whose dither-driven response carries the most of this output's variance (its own
-    // actuator). When two channels share their dynamics, the data cannot tell through which one
-    // a fed-back force enters; trying it on every flagged input would let noise pick.
-    let var_of = |x: &[f64]| {
-        let rows = split.train.clone();
-        let m = x[rows.clone()].iter().sum::<f64>() / rows.len().max(1) as f64;
-        x[rows].iter().map(|v| (v - m).powi(2)).sum::<f64>()
-    };
-    let dominant = inputs
-        .iter()
-        .copied()
-        .filter(|&i| ctx.has_channel[i])
-        .max_by(|&a, &b| var_of(&inst.s_channel[a]).total_cmp(&var_of(&inst.s_channel[b])));
+    // that is this output's own actuator. When two channels share their dynamics, the data
+    // cannot tell through which one a fed-back force enters; trying it on every flagged input
+    // would let noise pick.
+    let dominant = own_actuator(ctx, inst, r, inputs, split.train.clone());
     for &i in inputs {
         let mut terms = grid(ctx, i, split.fit.clone());
         if dominant.is_some_and(|d| d != i) {
@@ -323,6 +314,56 @@ pub fn rank(
     out
 }
 
+/// The output's own actuator among `inputs` (those with a model channel). In a closed loop, the
+/// input whose controller move (the input less its dither-driven part) a PI law of this output
+/// explains best: the move's increment regressed on the output's increment and level, now and
+/// one sample before (R², training rows). Without controller moves (an open loop) or when no
+/// regression can be made: the input whose dither-driven response carries the most of this
+/// output's variance. Under decentralised control the first rule finds the loop's pairing, which
+/// the second misses wherever a coupling is stronger than the loop's own channel.
+fn own_actuator(
+    ctx: &OutputCtx,
+    inst: &OutputCtx,
+    r: &[f64],
+    inputs: &[usize],
+    rows: std::ops::Range<usize>,
+) -> Option<usize> {
+    let with_channel = || inputs.iter().copied().filter(|&i| ctx.has_channel[i]);
+    let var_of = |x: &[f64]| {
+        let m = x[rows.clone()].iter().sum::<f64>() / rows.len().max(1) as f64;
+        x[rows.clone()].iter().map(|v| (v - m).powi(2)).sum::<f64>()
+    };
+    let y: Vec<f64> = r.iter().zip(&ctx.s).map(|(a, b)| a + b).collect();
+    let dy: Vec<f64> = (0..y.len()).map(|t| if t == 0 { 0.0 } else { y[t] - y[t - 1] }).collect();
+    let (dy1, y1) = (delayed(&dy, 1), delayed(&y, 1));
+    let fit_rows: Vec<usize> = rows.clone().filter(|&t| t >= 2).collect();
+    let one = vec![1.0; y.len()];
+    let pairing = |i: usize| -> Option<f64> {
+        let uc: Vec<f64> = ctx.ut[i].iter().zip(&inst.ut[i]).map(|(a, b)| a - b).collect();
+        let duc: Vec<f64> = (0..uc.len()).map(|t| if t == 0 { 0.0 } else { uc[t] - uc[t - 1] }).collect();
+        let m = fit_rows.iter().map(|&t| duc[t]).sum::<f64>() / fit_rows.len().max(1) as f64;
+        let sst: f64 = fit_rows.iter().map(|&t| (duc[t] - m).powi(2)).sum();
+        if sst <= 1e-12 * (1.0 + var_of(&ctx.ut[i])) {
+            return None;
+        }
+        let cols: [&[f64]; 5] = [&dy, &dy1, &y, &y1, &one];
+        let b = least_squares_rows(&cols, &duc, &fit_rows)?;
+        let sse: f64 = fit_rows
+            .iter()
+            .map(|&t| duc[t] - cols.iter().zip(&b).map(|(c, k)| c[t] * k).sum::<f64>())
+            .map(|e| e * e)
+            .sum();
+        Some(1.0 - sse / sst)
+    };
+    let r2: Option<Vec<(usize, f64)>> = with_channel().map(|i| pairing(i).map(|v| (i, v))).collect();
+    match r2 {
+        Some(v) if !v.is_empty() => v.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|(i, _)| i),
+        _ => {
+            with_channel().max_by(|&a, &b| var_of(&inst.s_channel[a]).total_cmp(&var_of(&inst.s_channel[b])))
+        }
+    }
+}
+
 /// Per input with a model channel, `G0(ud²)`, `G0(ud³)`, `sd²`, `sd³`, `G0(sd³)` of its
 /// dither-driven centred input `ud` and response `sd`; and the square and cube of the whole
 /// dither-driven output (what an output-side map makes of the dither).
@@ -352,6 +393,57 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
+
+    /// The own actuator of an output under decentralised PI control: u1's controller move follows
+    /// y by a PI law, u2's follows another loop's output z, and u2's channel into y is ten times
+    /// u1's. The pairing names u1 (its move is explained exactly, R² = 1; u2's not at all, z
+    /// being independent of y), where the variance of the channels' responses names u2; with no
+    /// controller move (an open loop: the dither-driven part is the whole input) that variance
+    /// rule is kept.
+    #[test]
+    fn own_actuator_is_the_loop_that_controls_the_output() {
+        let n = 2000;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut white = || -> Vec<f64> { (0..n).map(|_| StandardNormal.sample(&mut rng)).collect() };
+        let (d1, d2, e_y, e_z) = (white(), white(), white(), white());
+        let ar = |e: &[f64]| -> Vec<f64> {
+            let mut x = 0.0;
+            e.iter()
+                .map(|v| {
+                    x = 0.9 * x + v;
+                    x
+                })
+                .collect()
+        };
+        let pi = |x: &[f64]| -> Vec<f64> {
+            let mut u = 0.0;
+            (0..n)
+                .map(|t| {
+                    u += -0.3 * (x[t] - if t > 0 { x[t - 1] } else { 0.0 }) - 0.1 * x[t];
+                    u
+                })
+                .collect()
+        };
+        let (y, z) = (ar(&e_y), ar(&e_z));
+        let u1: Vec<f64> = d1.iter().zip(pi(&y)).map(|(d, c)| d + c).collect();
+        let u2: Vec<f64> = d2.iter().zip(pi(&z)).map(|(d, c)| d + c).collect();
+        let s: Vec<f64> = (0..n).map(|t| if t > 0 { 0.1 * u1[t - 1] + u2[t - 1] } else { 0.0 }).collect();
+        let split = Split {
+            features: None,
+            fit: 20..n,
+            train: 20..n,
+            folds: Vec::new(),
+            closed_loop: true,
+            whiten: 0,
+        };
+        let ctx = crate::plan::output_ctx(&[&u1, &u2], &s, &split);
+        assert!(ctx.has_channel[0] && ctx.has_channel[1]);
+        let r: Vec<f64> = y.iter().zip(&s).map(|(a, b)| a - b).collect();
+        let closed = crate::plan::instrument_ctx(&ctx, &[d1, d2]);
+        assert_eq!(own_actuator(&ctx, &closed, &r, &[0, 1], 20..n), Some(0));
+        let open = crate::plan::instrument_ctx(&ctx, &[u1.clone(), u2.clone()]);
+        assert_eq!(own_actuator(&ctx, &open, &r, &[0, 1], 20..n), Some(1));
+    }
 
     /// An AR(1) series with unit innovations: the one-step prediction error of a fitted AR model
     /// is the innovation, so the validation SSE per sample is 1 (closed form). With 10 000
