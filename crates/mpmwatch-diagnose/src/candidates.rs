@@ -461,12 +461,16 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     }
     // Symmetric limits about the middle three quantile centres and the mean, down to a tenth
     // of `|u − c|`'s distribution: an actuator that spends most of the record at its limits (a
-    // strongly saturated one) passes only its smallest moves.
+    // strongly saturated one) passes only its smallest moves. An input that sits at a centre
+    // for a tenth of the rows or more (a quantised valve, a loop in manual) gives a limit of
+    // width zero there, a dead channel rather than a limit, which is not offered.
     let symmetric = [1, 2, 3, 5];
     for q in [0.1, 0.2, 0.3, 0.4] {
         for &k in &symmetric {
             let (c, a) = (centres[k], quantile(&dev[k], q));
-            out.push(Term::SaturationIn { lo: c - a, hi: c + a });
+            if a > 0.0 {
+                out.push(Term::SaturationIn { lo: c - a, hi: c + a });
+            }
         }
     }
     for q in [0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95] {
@@ -614,9 +618,16 @@ mod tests {
         let terms = grid(&ctx, 0, 0..n);
         assert!(
             terms.iter().any(
-                |t| matches!(t, Term::SaturationIn { lo, hi } if (0.05..0.15).contains(&((hi - lo) / 2.0)))
+                |t| matches!(t, Term::SaturationIn { lo, hi } if (0.05..0.15).contains(&((hi - lo) / 2.0)) && ((lo + hi) / 2.0).abs() < 0.05)
             ),
             "no symmetric limit clipping nine moves in ten"
+        );
+        // Held at zero for a fifth of the rows: no limit of width zero is offered.
+        let held: Vec<f64> = u.iter().enumerate().map(|(t, &v)| if t % 5 == 0 { 0.0 } else { v }).collect();
+        let ctx = crate::plan::output_ctx(&[&held], &s, &split_on(0..n));
+        assert!(
+            !grid(&ctx, 0, 0..n).iter().any(|t| matches!(t, Term::SaturationIn { lo, hi } if lo >= hi)),
+            "a limit of width zero"
         );
     }
 
