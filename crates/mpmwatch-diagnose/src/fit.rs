@@ -314,6 +314,17 @@ mod tests {
         assert!((unfiltered_instruments[1] - th[1]).abs() > 1e-6, "the check cannot tell the two apart");
     }
 
+    /// 1500 uniform samples on [−1, 1] drawn with `seed` through a one-sample delay, and the
+    /// column of a dead zone of half-width 0.3 about 0.1 on them; the generator goes on.
+    fn dead_zone_on_uniform(seed: u64) -> (OutputCtx, Vec<f64>, rand_chacha::ChaCha8Rng) {
+        use rand::Rng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let u: Vec<f64> = (0..1500).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let ctx = crate::plan::delay_ctx(&u, 1.0);
+        let effect = ctx.columns(0, &Term::DeadZone { centre: 0.1, w: 0.3 }).remove(0);
+        (ctx, effect, rng)
+    }
+
     /// A dead zone of half-width 0.3 about 0.1 on a uniform input, noise-free: refined from a
     /// grid value beside it, (0.0, 0.25), the fit reaches the exact values, where the corrected
     /// residual is zero and nowhere else. Reached exactly on this seed; the bound, 1e-4, is
@@ -322,12 +333,8 @@ mod tests {
     /// fail it. A term with nothing continuous is fitted as it is.
     #[test]
     fn refinement_reaches_a_threshold_between_grid_values() {
-        use rand::Rng;
-        let n = 1500;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
-        let u: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let ctx = crate::plan::delay_ctx(&u, 1.0);
-        let r = ctx.columns(0, &Term::DeadZone { centre: 0.1, w: 0.3 }).remove(0);
+        let (ctx, r, _) = dead_zone_on_uniform(6);
+        let n = r.len();
         let rows: Vec<usize> = (20..n).collect();
         let f = refine(&ctx, &ctx, &r, 0, &Term::DeadZone { centre: 0.0, w: 0.25 }, &rows, 0).unwrap();
         let Term::DeadZone { centre, w } = f.term else { panic!("{:?}", f.term) };
@@ -342,12 +349,8 @@ mod tests {
     /// disturbance, so the whitening and the solver both have work to do.
     #[test]
     fn refinement_never_reaches_an_excluded_block() {
-        use rand::Rng;
-        let n = 1500;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let u: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let ctx = crate::plan::delay_ctx(&u, 1.0);
-        let effect = ctx.columns(0, &Term::DeadZone { centre: 0.1, w: 0.3 }).remove(0);
+        let (ctx, effect, mut rng) = dead_zone_on_uniform(7);
+        let n = effect.len();
         let mut v = 0.0;
         let r: Vec<f64> = effect
             .iter()
