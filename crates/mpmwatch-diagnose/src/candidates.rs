@@ -593,7 +593,7 @@ mod tests {
             )
             .collect();
         let s: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split_on(20..400));
+        let ctx = crate::plan::output_ctx(&[&u], &s, &crate::plan::open_split(20..400));
         let terms = grid(&ctx, 0, 20..400);
         let inside = |w: f64| (0.2..0.8).contains(&w);
         assert!(
@@ -614,7 +614,7 @@ mod tests {
         let n = 1000;
         let u: Vec<f64> = (0..n).map(|t| ((t * 7919) % n) as f64 / n as f64 * 2.0 - 1.0).collect();
         let s: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
-        let ctx = crate::plan::output_ctx(&[&u], &s, &split_on(0..n));
+        let ctx = crate::plan::output_ctx(&[&u], &s, &crate::plan::open_split(0..n));
         let terms = grid(&ctx, 0, 0..n);
         assert!(
             terms.iter().any(
@@ -624,23 +624,11 @@ mod tests {
         );
         // Held at zero for a fifth of the rows: no limit of width zero is offered.
         let held: Vec<f64> = u.iter().enumerate().map(|(t, &v)| if t % 5 == 0 { 0.0 } else { v }).collect();
-        let ctx = crate::plan::output_ctx(&[&held], &s, &split_on(0..n));
+        let ctx = crate::plan::output_ctx(&[&held], &s, &crate::plan::open_split(0..n));
         assert!(
             !grid(&ctx, 0, 0..n).iter().any(|t| matches!(t, Term::SaturationIn { lo, hi } if lo >= hi)),
             "a limit of width zero"
         );
-    }
-
-    /// An open-loop split that fits and trains on `rows`, with no folds.
-    fn split_on(rows: std::ops::Range<usize>) -> crate::select::Split {
-        crate::select::Split {
-            features: None,
-            fit: rows.clone(),
-            train: rows,
-            folds: Vec::new(),
-            closed_loop: false,
-            whiten: 0,
-        }
     }
 
     #[test]

@@ -107,15 +107,19 @@ pub(crate) fn plan<'a>(input: &DiagnoseInput<'a>, opts: &DiagnoseOptions) -> Res
 /// counts as closed: numerical noise only (an input equal to its excitation leaves about 1e-30).
 const CLOSED_LOOP_SHARE: f64 = 1e-6;
 
+/// For tests: an open-loop split that fits and trains on `rows`, with no folds.
+#[cfg(test)]
+pub(crate) fn open_split(rows: std::ops::Range<usize>) -> Split {
+    Split { features: None, fit: rows.clone(), train: rows, folds: Vec::new(), closed_loop: false, whiten: 0 }
+}
+
 /// For tests: the context of one input whose nominal is a one-sample delay of gain `k`
 /// (`s(t) = k·u(t−1)`), open loop, every row from 20 on a fit and training row.
 #[cfg(test)]
 pub(crate) fn delay_ctx(u: &[f64], k: f64) -> OutputCtx {
     let n = u.len();
     let s: Vec<f64> = (0..n).map(|t| if t > 0 { k * u[t - 1] } else { 0.0 }).collect();
-    let split =
-        Split { features: None, fit: 20..n, train: 20..n, folds: Vec::new(), closed_loop: false, whiten: 0 };
-    output_ctx(&[u], &s, &split)
+    output_ctx(&[u], &s, &open_split(20..n))
 }
 
 /// The context of one output: centred inputs, the identified nominal model and its channels.
