@@ -316,11 +316,15 @@ pub fn rank(
 
 /// The output's own actuator among `inputs` (those with a model channel). In a closed loop, the
 /// input whose controller move (the input less its dither-driven part) a PI law of this output
-/// explains best: the move's increment regressed on the output's increment and level, now and
-/// one sample before (R², training rows). Without controller moves (an open loop) or when no
-/// regression can be made: the input whose dither-driven response carries the most of this
-/// output's variance. Under decentralised control the first rule finds the loop's pairing, which
-/// the second misses wherever a coupling is stronger than the loop's own channel.
+/// explains best: the move's increment regressed on the measured output's increment and level,
+/// now and one sample before (R², training rows), the law a PI controller applies to what it
+/// measures. An input without controller moves (in manual, or an open loop) takes no part, and
+/// the best R² must pass a floor: `n·R²` above 18.47, the 0.001 quantile of χ²(4) that it
+/// follows, for independent rows, when the move does not answer this output. Otherwise (no
+/// input's move answers this output: an open loop, or a loop through an input nobody flagged):
+/// the input whose dither-driven response carries the most of this output's variance. Under
+/// decentralised control the first rule finds the loop's pairing, which the second misses
+/// wherever a coupling is stronger than the loop's own channel.
 fn own_actuator(
     ctx: &OutputCtx,
     inst: &OutputCtx,
@@ -355,14 +359,19 @@ fn own_actuator(
             .sum();
         Some(1.0 - sse / sst)
     };
-    let r2: Option<Vec<(usize, f64)>> = with_channel().map(|i| pairing(i).map(|v| (i, v))).collect();
-    match r2 {
-        Some(v) if !v.is_empty() => v.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|(i, _)| i),
-        _ => {
-            with_channel().max_by(|&a, &b| var_of(&inst.s_channel[a]).total_cmp(&var_of(&inst.s_channel[b])))
-        }
-    }
+    let paired = with_channel()
+        .filter_map(|i| pairing(i).map(|v| (i, v)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .filter(|&(_, r2)| fit_rows.len() as f64 * r2 > PAIRING_CHI2_4_AT_0_001);
+    paired.map(|(i, _)| i).or_else(|| {
+        with_channel().max_by(|&a, &b| var_of(&inst.s_channel[a]).total_cmp(&var_of(&inst.s_channel[b])))
+    })
 }
+
+/// The 0.001 upper quantile of χ² with 4 degrees of freedom: `n·R²` of a regression on four
+/// regressors and an intercept follows it when they do not explain the regressand (the Lagrange
+/// multiplier form of the F-test, for independent rows).
+const PAIRING_CHI2_4_AT_0_001: f64 = 18.467;
 
 /// Per input with a model channel, `G0(ud²)`, `G0(ud³)`, `sd²`, `sd³`, `G0(sd³)` of its
 /// dither-driven centred input `ud` and response `sd`; and the square and cube of the whole
@@ -394,18 +403,17 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
-    /// The own actuator of an output under decentralised PI control: u1's controller move follows
-    /// y by a PI law, u2's follows another loop's output z, and u2's channel into y is ten times
-    /// u1's. The pairing names u1 (its move is explained exactly, R² = 1; u2's not at all, z
-    /// being independent of y), where the variance of the channels' responses names u2; with no
-    /// controller move (an open loop: the dither-driven part is the whole input) that variance
-    /// rule is kept.
-    #[test]
-    fn own_actuator_is_the_loop_that_controls_the_output() {
+    /// Two inputs whose controller moves follow PI laws of `follows` (none: the input is its
+    /// dither alone, a loop in manual), the channel of input `big` into the output ten times the
+    /// other's; the output
+    /// `y` and a second and third loop's outputs `z`, `w`, independent AR(1) series. Returns the
+    /// own actuator found with the dithers as instruments and, with the whole inputs as
+    /// instruments (no controller moves: an open loop), the one the variance rule names.
+    fn own_actuator_of(follows: [Option<char>; 2], big: usize) -> (Option<usize>, Option<usize>) {
         let n = 2000;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let mut white = || -> Vec<f64> { (0..n).map(|_| StandardNormal.sample(&mut rng)).collect() };
-        let (d1, d2, e_y, e_z) = (white(), white(), white(), white());
+        let (d1, d2, e_y, e_z, e_w) = (white(), white(), white(), white(), white());
         let ar = |e: &[f64]| -> Vec<f64> {
             let mut x = 0.0;
             e.iter()
@@ -424,10 +432,24 @@ mod tests {
                 })
                 .collect()
         };
-        let (y, z) = (ar(&e_y), ar(&e_z));
-        let u1: Vec<f64> = d1.iter().zip(pi(&y)).map(|(d, c)| d + c).collect();
-        let u2: Vec<f64> = d2.iter().zip(pi(&z)).map(|(d, c)| d + c).collect();
-        let s: Vec<f64> = (0..n).map(|t| if t > 0 { 0.1 * u1[t - 1] + u2[t - 1] } else { 0.0 }).collect();
+        let (y, z, w) = (ar(&e_y), ar(&e_z), ar(&e_w));
+        let input = |d: &[f64], f: Option<char>| -> Vec<f64> {
+            match f {
+                None => d.to_vec(),
+                Some(c) => d
+                    .iter()
+                    .zip(pi(match c {
+                        'y' => &y,
+                        'z' => &z,
+                        _ => &w,
+                    }))
+                    .map(|(d, c)| d + c)
+                    .collect(),
+            }
+        };
+        let (u1, u2) = (input(&d1, follows[0]), input(&d2, follows[1]));
+        let (k1, k2) = if big == 0 { (1.0, 0.1) } else { (0.1, 1.0) };
+        let s: Vec<f64> = (0..n).map(|t| if t > 0 { k1 * u1[t - 1] + k2 * u2[t - 1] } else { 0.0 }).collect();
         let split = Split {
             features: None,
             fit: 20..n,
@@ -440,9 +462,34 @@ mod tests {
         assert!(ctx.has_channel[0] && ctx.has_channel[1]);
         let r: Vec<f64> = y.iter().zip(&s).map(|(a, b)| a - b).collect();
         let closed = crate::plan::instrument_ctx(&ctx, &[d1, d2]);
-        assert_eq!(own_actuator(&ctx, &closed, &r, &[0, 1], 20..n), Some(0));
         let open = crate::plan::instrument_ctx(&ctx, &[u1.clone(), u2.clone()]);
-        assert_eq!(own_actuator(&ctx, &open, &r, &[0, 1], 20..n), Some(1));
+        (own_actuator(&ctx, &closed, &r, &[0, 1], 20..n), own_actuator(&ctx, &open, &r, &[0, 1], 20..n))
+    }
+
+    /// u1's move is a PI law of the output (R² = 1), u2's follows another loop's output. The
+    /// pairing names u1, where the variance of the channels' responses, the rule kept for an open
+    /// loop, names u2.
+    #[test]
+    fn own_actuator_is_the_loop_that_controls_the_output() {
+        assert_eq!(own_actuator_of([Some('y'), Some('z')], 1), (Some(0), Some(1)));
+    }
+
+    /// u1 controls the output and u2 is in manual (its input is its dither): u2 takes no part in
+    /// the pairing and u1 is still named. Under the rule before stop 36 one input without moves
+    /// turned the pairing off for every input and the variance rule named u2.
+    #[test]
+    fn an_input_in_manual_leaves_the_pairing_to_the_others() {
+        assert_eq!(own_actuator_of([Some('y'), None], 1).0, Some(0));
+    }
+
+    /// Neither move answers the output (u1 follows `w`, u2 follows `z`, both independent of `y`):
+    /// the best R² is chance, about 4/n, under the floor, so the variance rule names the input
+    /// with the larger channel, whichever it is. Without the floor chance would pick, and the
+    /// same input both times (the moves and the output do not change with the channels).
+    #[test]
+    fn no_loop_on_the_output_falls_back_to_the_variance_rule() {
+        assert_eq!(own_actuator_of([Some('w'), Some('z')], 1).0, Some(1));
+        assert_eq!(own_actuator_of([Some('w'), Some('z')], 0).0, Some(0));
     }
 
     /// An AR(1) series with unit innovations: the one-step prediction error of a fitted AR model
