@@ -56,9 +56,13 @@ pub(crate) fn decide(
     // A closed loop has its own margin (larger by default) and no block is required to gain: there the plain
     // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
     // so small average gains are noise, while large ones that lost on one block held up on the
-    // held-out tail (docs/diagnose.md, "The closed loop's margin").
+    // held-out tail (docs/diagnose.md, "The closed loop's margin"). A smaller gain passes there
+    // too when it is consistent (the open-loop margin on average, no block lower) and the data
+    // single out its class: its score leads every other class's by `CLASS_LEAD`. A small gain
+    // that several classes share says that something is there, not what.
     let margin = if split.closed_loop { opts.closed_loop_min_gain_pct } else { opts.min_gain_pct };
-    let passes = |g: &CvGain| g.mean >= margin;
+    let lead = class_lead(ranked);
+    let passes = |g: &CvGain| gate_passes(g, lead, split.closed_loop, opts);
     let top_gain = top_gain.flatten();
     let best = best.filter(|_| top_gain.is_some_and(|g| passes(&g)));
     let out_name = input.outputs[j].name;
@@ -93,11 +97,24 @@ pub(crate) fn decide(
         .zip(top_gain)
         .map(|(f, g)| {
             format!(
-                "; the best-scored candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block (a finding needs {:+.1} on average)",
+                "; the best-scored candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block (a finding needs {:+.1} on average{}){}",
                 f.term.physics().name(),
                 g.mean,
                 g.min,
                 margin,
+                if split.closed_loop {
+                    format!(
+                        ", or {:+.1} with no block lower and a score {CLASS_LEAD} units ahead of every other class",
+                        opts.min_gain_pct
+                    )
+                } else {
+                    String::new()
+                },
+                if split.closed_loop && lead.is_finite() {
+                    format!("; its lead over the next class is {lead:.1} units")
+                } else {
+                    String::new()
+                },
             )
         })
         .unwrap_or_default();
@@ -117,6 +134,31 @@ pub(crate) fn decide(
         tried,
     };
     (finding, None)
+}
+
+/// The honesty gate on a cross-validated gain `g` whose class leads the others by `lead` score
+/// units: the margin on average (the closed loop's own in a closed loop); in a closed loop also
+/// the open-loop margin on average with no block lower and a lead of [`CLASS_LEAD`].
+fn gate_passes(g: &CvGain, lead: f64, closed_loop: bool, opts: &DiagnoseOptions) -> bool {
+    if !closed_loop {
+        return g.mean >= opts.min_gain_pct;
+    }
+    g.mean >= opts.closed_loop_min_gain_pct
+        || (g.mean >= opts.min_gain_pct && g.min >= 0.0 && lead >= CLASS_LEAD)
+}
+
+/// The lead, in score units, by which a closed-loop finding with a small but consistent gain
+/// must single out its class. The score is a cross-validated −2 log-likelihood (plus a parsimony penalty
+/// that differs little between classes), so 10 units is a likelihood ratio of e⁵ ≈ 150, where the conventional reading is that the data leave the
+/// runner-up essentially no support.
+const CLASS_LEAD: f64 = 10.0;
+
+/// How far the best-ranked class's score leads the best of every other class (infinite when no
+/// other class was scored).
+fn class_lead(ranked: &[select::Scored]) -> f64 {
+    let mut classes = ranked.iter().filter_map(|s| s.fitted.as_ref().map(|f| (f.term.physics(), s.score)));
+    let Some((top, top_score)) = classes.next() else { return f64::INFINITY };
+    classes.find(|(ph, _)| *ph != top).map_or(f64::INFINITY, |(_, score)| score - top_score)
 }
 
 /// A hypothesis' plain FIT gain over no correction, in points, on each block of the training
@@ -148,4 +190,49 @@ fn cv_gain(
     let mean = gains.iter().sum::<f64>() / gains.len().max(1) as f64;
     let min = gains.iter().copied().fold(f64::INFINITY, f64::min);
     (mean.is_finite() && !gains.is_empty()).then_some(CvGain { mean, min })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::candidates::Term;
+
+    fn scored(term: Option<Term>, score: f64) -> select::Scored {
+        let fitted =
+            term.map(|term| simulate::FittedTerm { input: 0, term, intercept: 0.0, coefs: vec![0.0] });
+        select::Scored { fitted, sse: 1.0, complexity: 1, score, grid: None }
+    }
+
+    /// The lead is taken over the best hypothesis of another class: a second hypothesis of the
+    /// winner's class (a dead zone at another width) and the null do not count.
+    #[test]
+    fn class_lead_is_over_the_next_class() {
+        let ranked = vec![
+            scored(Some(Term::DeadZone { centre: 0.0, w: 0.2 }), -300.0),
+            scored(Some(Term::DeadZone { centre: 0.0, w: 0.3 }), -299.0),
+            scored(None, -250.0),
+            scored(Some(Term::Gain), -275.5),
+            scored(Some(Term::Cubic), -100.0),
+        ];
+        assert_eq!(class_lead(&ranked), 24.5);
+        assert_eq!(class_lead(&ranked[..3]), f64::INFINITY);
+        assert_eq!(class_lead(&[]), f64::INFINITY);
+    }
+
+    /// The closed loop's two routes and the open loop's one, at the default margins (0.5 and 2
+    /// points): a small consistent gain passes in a closed loop only with its class singled out;
+    /// a block that loses, or a lead under 10 units, withholds it; 2 points on average pass
+    /// whatever the blocks and the lead.
+    #[test]
+    fn the_gate_takes_a_small_gain_only_when_consistent_and_singled_out() {
+        let o = DiagnoseOptions::default();
+        let g = |mean, min| CvGain { mean, min };
+        assert!(gate_passes(&g(1.3, 1.0), 301.6, true, &o));
+        assert!(!gate_passes(&g(1.5, 0.8), 1.6, true, &o));
+        assert!(!gate_passes(&g(1.8, -0.01), 664.0, true, &o));
+        assert!(!gate_passes(&g(0.4, 0.3), 100.0, true, &o));
+        assert!(gate_passes(&g(2.0, -50.0), 0.0, true, &o));
+        assert!(gate_passes(&g(0.5, -3.0), 0.0, false, &o));
+        assert!(!gate_passes(&g(0.4, 0.4), f64::INFINITY, false, &o));
+    }
 }
