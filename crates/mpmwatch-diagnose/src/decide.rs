@@ -62,7 +62,9 @@ pub(crate) fn decide(
     // that several classes share says that something is there, not what.
     let margin = if split.closed_loop { opts.closed_loop_min_gain_pct } else { opts.min_gain_pct };
     let lead = class_lead(ranked);
-    let passes = |g: &CvGain| gate_passes(g, lead, split.closed_loop, opts);
+    // The lead is read as evidence only where the score is a likelihood: the prediction error.
+    let likelihood = opts.scoring == select::Scoring::Prediction;
+    let passes = |g: &CvGain| gate_passes(g, if likelihood { lead } else { 0.0 }, split.closed_loop, opts);
     let top_gain = top_gain.flatten();
     let best = best.filter(|_| top_gain.is_some_and(|g| passes(&g)));
     let out_name = input.outputs[j].name;
@@ -102,7 +104,7 @@ pub(crate) fn decide(
                 g.mean,
                 g.min,
                 margin,
-                if split.closed_loop {
+                if split.closed_loop && likelihood {
                     format!(
                         ", or {:+.1} with no block lower and a score {CLASS_LEAD} units ahead of every other class",
                         opts.min_gain_pct
@@ -110,7 +112,7 @@ pub(crate) fn decide(
                 } else {
                     String::new()
                 },
-                if split.closed_loop && lead.is_finite() {
+                if split.closed_loop && likelihood && lead.is_finite() {
                     format!("; its lead over the next class is {lead:.1} units")
                 } else {
                     String::new()
@@ -148,9 +150,11 @@ fn gate_passes(g: &CvGain, lead: f64, closed_loop: bool, opts: &DiagnoseOptions)
 }
 
 /// The lead, in score units, by which a closed-loop finding with a small but consistent gain
-/// must single out its class. The score is a cross-validated −2 log-likelihood (plus a parsimony penalty
-/// that differs little between classes), so 10 units is a likelihood ratio of e⁵ ≈ 150, where the conventional reading is that the data leave the
-/// runner-up essentially no support.
+/// must single out its class (what the finding names; not its input or side). The score is a
+/// cross-validated −2 log-likelihood plus a BIC-type penalty per parameter, so between classes of
+/// equal complexity 10 units is a likelihood ratio of e⁵ ≈ 150, where the conventional reading is
+/// that the data leave the runner-up essentially no support; a class with more parameters must
+/// also lead by its extra penalty.
 const CLASS_LEAD: f64 = 10.0;
 
 /// How far the best-ranked class's score leads the best of every other class (infinite when no
@@ -210,7 +214,7 @@ mod tests {
         let ranked = vec![
             scored(Some(Term::DeadZone { centre: 0.0, w: 0.2 }), -300.0),
             scored(Some(Term::DeadZone { centre: 0.0, w: 0.3 }), -299.0),
-            scored(None, -250.0),
+            scored(None, -280.0),
             scored(Some(Term::Gain), -275.5),
             scored(Some(Term::Cubic), -100.0),
         ];
@@ -228,6 +232,7 @@ mod tests {
         let o = DiagnoseOptions::default();
         let g = |mean, min| CvGain { mean, min };
         assert!(gate_passes(&g(1.3, 1.0), 301.6, true, &o));
+        assert!(gate_passes(&g(0.5, 0.0), 10.0, true, &o));
         assert!(!gate_passes(&g(1.5, 0.8), 1.6, true, &o));
         assert!(!gate_passes(&g(1.8, -0.01), 664.0, true, &o));
         assert!(!gate_passes(&g(0.4, 0.3), 100.0, true, &o));
