@@ -316,9 +316,9 @@ pub fn rank(
 
 /// The output's own actuator among `inputs` (those with a model channel). In a closed loop, the
 /// input whose controller move (the input less its dither-driven part) a PI law of this output
-/// explains best: the move's increment regressed on the measured output's increment and level,
-/// now and one sample before, which span the output now and one and two samples before (R²,
-/// training rows); the law a PI controller applies to what it measures. An input without
+/// explains best: the move's increment regressed on the measured output now and one and two
+/// samples before (R², training rows), the span of a PI law's increment and level of the output
+/// with one sample of delay, the law a PI controller applies to what it measures. An input without
 /// controller moves (in manual, or an open loop) takes no part, and the best R² must pass a
 /// floor: `n·R²` above 16.27, the upper 0.001 quantile of χ²(3) that it follows when the move
 /// does not answer this output and the rows are independent. Autocorrelated rows pass it by
@@ -406,10 +406,10 @@ mod tests {
 
     /// Two inputs whose controller moves follow PI laws of `follows` (none: the input is its
     /// dither alone, a loop in manual), the channel of input `big` into the output ten times the
-    /// other's; the output
-    /// `y` and a second and third loop's outputs `z`, `w`, independent AR(1) series. Returns the
-    /// own actuator found with the dithers as instruments and, with the whole inputs as
-    /// instruments (no controller moves: an open loop), the one the variance rule names.
+    /// other's; the output `y` and a second and third loop's outputs `z`, `w` are independent
+    /// AR(1) series. Returns the own actuator found with the dithers as instruments and, with the
+    /// whole inputs as instruments (no controller moves: an open loop), the one the variance
+    /// rule names.
     fn own_actuator_of(follows: [Option<char>; 2], big: usize) -> (Option<usize>, Option<usize>) {
         let n = 2000;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
@@ -451,14 +451,7 @@ mod tests {
         let (u1, u2) = (input(&d1, follows[0]), input(&d2, follows[1]));
         let (k1, k2) = if big == 0 { (1.0, 0.1) } else { (0.1, 1.0) };
         let s: Vec<f64> = (0..n).map(|t| if t > 0 { k1 * u1[t - 1] + k2 * u2[t - 1] } else { 0.0 }).collect();
-        let split = Split {
-            features: None,
-            fit: 20..n,
-            train: 20..n,
-            folds: Vec::new(),
-            closed_loop: true,
-            whiten: 0,
-        };
+        let split = Split { closed_loop: true, ..crate::plan::open_split(20..n) };
         let ctx = crate::plan::output_ctx(&[&u1, &u2], &s, &split);
         assert!(ctx.has_channel[0] && ctx.has_channel[1]);
         let r: Vec<f64> = y.iter().zip(&s).map(|(a, b)| a - b).collect();
