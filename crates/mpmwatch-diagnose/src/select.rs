@@ -379,27 +379,29 @@ fn pi_law_fit(du: &[f64], y: [&[f64]; 3]) -> Option<f64> {
     if m < PAIRING_SURROGATES + 1 {
         return None;
     }
+    let real = pi_law_r2(du, y)?;
+    let shifted = |k: usize| -> Vec<f64> { (0..m).map(|t| du[(t + k) % m]).collect() };
+    (1..=PAIRING_SURROGATES)
+        .all(|j| pi_law_r2(&shifted(j * m / (PAIRING_SURROGATES + 1)), y).is_some_and(|s| s < real))
+        .then_some(real)
+}
+
+/// The R² of `du` regressed on `y` (the output now, one and two samples back) and 1 (`None`: a
+/// constant `du` or a failed fit).
+fn pi_law_r2(du: &[f64], y: [&[f64]; 3]) -> Option<f64> {
+    let m = du.len();
+    let mean = du.iter().sum::<f64>() / m as f64;
+    let sst: f64 = du.iter().map(|v| (v - mean).powi(2)).sum();
+    if sst.is_nan() || sst <= 0.0 {
+        return None;
+    }
     let one = vec![1.0; m];
     let cols: [&[f64]; 4] = [y[0], y[1], y[2], &one];
     let all: Vec<usize> = (0..m).collect();
-    let r2 = |d: &[f64]| -> Option<f64> {
-        let mean = d.iter().sum::<f64>() / m as f64;
-        let sst: f64 = d.iter().map(|v| (v - mean).powi(2)).sum();
-        if sst.is_nan() || sst <= 0.0 {
-            return None;
-        }
-        let b = least_squares_rows(&cols, d, &all)?;
-        let sse: f64 = (0..m)
-            .map(|t| d[t] - cols.iter().zip(&b).map(|(c, k)| c[t] * k).sum::<f64>())
-            .map(|e| e * e)
-            .sum();
-        Some(1.0 - sse / sst)
-    };
-    let real = r2(du)?;
-    let shifted = |k: usize| -> Vec<f64> { (0..m).map(|t| du[(t + k) % m]).collect() };
-    (1..=PAIRING_SURROGATES)
-        .all(|j| r2(&shifted(j * m / (PAIRING_SURROGATES + 1))).is_some_and(|s| s < real))
-        .then_some(real)
+    let b = least_squares_rows(&cols, du, &all)?;
+    let sse: f64 =
+        (0..m).map(|t| du[t] - cols.iter().zip(&b).map(|(c, k)| c[t] * k).sum::<f64>()).map(|e| e * e).sum();
+    Some(1.0 - sse / sst)
 }
 
 /// Per input with a model channel, `G0(ud²)`, `G0(ud³)`, `sd²`, `sd³`, `G0(sd³)` of its
@@ -528,10 +530,8 @@ mod tests {
             let mut x = 0.0;
             let v: Vec<f64> = (0..n + 200)
                 .map(|_| {
-                    x = 0.9 * x + {
-                        let e: f64 = StandardNormal.sample(&mut rng);
-                        e
-                    };
+                    let e: f64 = StandardNormal.sample(&mut rng);
+                    x = 0.9 * x + e;
                     x
                 })
                 .collect();
@@ -548,16 +548,8 @@ mod tests {
                 passes += 1;
                 assert!(r2 >= 0.0);
             }
-            let one = vec![1.0; n - 2];
-            let all: Vec<usize> = (0..n - 2).collect();
-            let b = least_squares_rows(&[&y0, &y1, &y2, &one], du, &all).expect("a full-rank fit");
-            let m = du.iter().sum::<f64>() / du.len() as f64;
-            let sst: f64 = du.iter().map(|v| (v - m).powi(2)).sum();
-            let sse: f64 = (0..n - 2)
-                .map(|t| du[t] - b[0] * y0[t] - b[1] * y1[t] - b[2] * y2[t] - b[3])
-                .map(|e| e * e)
-                .sum();
-            if (n - 2) as f64 * (1.0 - sse / sst) > 16.266 {
+            let r2 = pi_law_r2(du, [&y0, &y1, &y2]).expect("a full-rank fit");
+            if (n - 2) as f64 * r2 > 16.266 {
                 chi2_passes += 1;
             }
         }
@@ -577,20 +569,15 @@ mod tests {
         let mut x = 0.0;
         let y: Vec<f64> = (0..n)
             .map(|_| {
-                x = 0.9 * x + {
-                    let e: f64 = StandardNormal.sample(&mut rng);
-                    e
-                };
+                let e: f64 = StandardNormal.sample(&mut rng);
+                x = 0.9 * x + e;
                 x
             })
             .collect();
         let du: Vec<f64> = (2..n)
             .map(|t| {
-                -0.3 * (y[t - 1] - y[t - 2]) - 0.1 * y[t - 1]
-                    + 0.8 * {
-                        let e: f64 = StandardNormal.sample(&mut rng);
-                        e
-                    }
+                let e: f64 = StandardNormal.sample(&mut rng);
+                -0.3 * (y[t - 1] - y[t - 2]) - 0.1 * y[t - 1] + 0.8 * e
             })
             .collect();
         let lag = |k: usize| -> Vec<f64> { (2..n).map(|t| y[t - k]).collect() };
