@@ -1,19 +1,18 @@
 //! Published samples to an alarm on the right channel over real zenoh on loopback, and its
 //! clear once the model is fixed; the events arrive on `mpm/c1/alarm`.
 
+use crate::fault_support::free_port;
 use crate::service_support::*;
 use mpmwatch_service::Service;
 
-const ZENOH: u16 = 17451;
-const HTTP: u16 = 19451;
-
 #[tokio::test(flavor = "multi_thread")]
 async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
-    let cfg = config(&config_text(ZENOH, HTTP, None, "every = 0.3\nraise_after = 2\nclear_after = 2"));
+    let (zport, http) = (free_port(), free_port());
+    let cfg = config(&config_text(zport, http, None, "every = 0.3\nraise_after = 2\nclear_after = 2"));
     let service = Service::start(cfg).await.unwrap();
-    let pubs = publisher(ZENOH).await;
+    let pubs = publisher(zport).await;
     let alarms = pubs.declare_subscriber("mpm/c1/alarm").await.unwrap();
-    wait_routed(&pubs, HTTP).await;
+    wait_routed(&pubs, http).await;
 
     // Phase 1: the model leaves out ud1's effect on y1.
     let mut toy = Toy::new(11);
@@ -36,7 +35,7 @@ async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
     assert_eq!(raised["verdict"], "mismatch");
     assert!(raised["value_bits"].as_f64().unwrap() > raised["critical_bits"].as_f64().unwrap());
     assert!(raised["time"].as_str().unwrap().contains('T'));
-    let (_, st) = get_json(HTTP, "/api/v1/controllers/c1").await;
+    let (_, st) = get_json(http, "/api/v1/controllers/c1").await;
     assert_eq!(st["active_alarms"], serde_json::json!(["ud1→y1"]));
 
     // Phase 2: the model is fixed; the window refills with clean residuals.
@@ -55,13 +54,13 @@ async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
     for e in &events {
         assert_eq!(e["channel"], "ud1→y1", "an alarm on a channel whose model is right: {e}");
     }
-    let (code, body) = get_json(HTTP, "/api/v1/controllers/c1/alarms").await;
+    let (code, body) = get_json(http, "/api/v1/controllers/c1/alarms").await;
     assert_eq!(code, 200);
     assert!(body["active"].as_array().unwrap().is_empty());
     let kinds: Vec<&str> =
         body["history"].as_array().unwrap().iter().map(|e| e["event"].as_str().unwrap()).collect();
     assert_eq!(kinds, vec!["raise", "clear"]);
-    let (_, metrics) = get(HTTP, "/metrics").await;
+    let (_, metrics) = get(http, "/metrics").await;
     assert!(metrics.contains(r#"mpm_active_alarms{controller="c1"} 0"#), "{metrics}");
     let _ = pubs.close().await;
     service.stop().await;

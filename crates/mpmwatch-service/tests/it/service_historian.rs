@@ -4,6 +4,7 @@
 //! back-filled), and a few bad messages. Every sample is ingested or counted by reason, the
 //! window ends whole, and the alarm rises on the planted channel only.
 
+use crate::fault_support::free_port;
 use crate::service_support::*;
 use mpmwatch_service::Service;
 use rand::seq::SliceRandom;
@@ -11,12 +12,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use zenoh::qos::CongestionControl;
 
-const ZENOH: u16 = 17456;
-const HTTP: u16 = 19456;
-
 /// The shared test config without `tolerance` or `grace`: the defaults decide.
-fn historian_config() -> String {
-    config_text(ZENOH, HTTP, None, "every = 0.5")
+fn historian_config(zport: u16, http: u16) -> String {
+    config_text(zport, http, None, "every = 0.5")
         .replace("window = 300\nmin_samples = 200\n", "window = 2048\nmin_samples = 1024\n")
 }
 
@@ -28,13 +26,14 @@ async fn put(s: &zenoh::Session, key: &str, payload: String) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn per_tag_batches_with_a_back_fill_lose_nothing_and_raise_the_right_alarm() {
-    let text = historian_config();
+    let (zport, http) = (free_port(), free_port());
+    let text = historian_config(zport, http);
     assert!(text.contains("window = 2048") && !text.contains("tolerance") && !text.contains("grace"));
     let service = Service::start(config(&text)).await.unwrap();
-    let s = publisher(ZENOH).await;
+    let s = publisher(zport).await;
     let alarms = s.declare_subscriber("mpm/c1/alarm").await.unwrap();
-    wait_routed(&s, HTTP).await;
-    let (_, st) = get_json(HTTP, "/api/v1/controllers/c1").await;
+    wait_routed(&s, http).await;
+    let (_, st) = get_json(http, "/api/v1/controllers/c1").await;
     let unknown_before = st["dropped"]["unknown_tag"].as_u64().unwrap();
 
     let mut rng = ChaCha8Rng::seed_from_u64(17);
@@ -73,7 +72,7 @@ async fn per_tag_batches_with_a_back_fill_lose_nothing_and_raise_the_right_alarm
     // Accounted: ingested, or dropped per sample (bad_payload counts messages, and the probes
     // were unknown tags before the count started).
     let st = until("every sample ingested or counted", || async {
-        let (_, v) = get_json(HTTP, "/api/v1/controllers/c1").await;
+        let (_, v) = get_json(http, "/api/v1/controllers/c1").await;
         let dropped: u64 = v["dropped"]
             .as_object()?
             .iter()

@@ -2,22 +2,21 @@
 //! server over loopback. Analyses are triggered directly (`scheduler::run_once`) so that the
 //! states before and after a run are deterministic.
 
+use crate::fault_support::free_port;
 use crate::service_support::*;
 use mpmwatch_service::{Service, run_once};
 
-const ZENOH: u16 = 17455;
-const HTTP: u16 = 19455;
-
 #[tokio::test(flavor = "multi_thread")]
 async fn http_api_bodies_and_error_codes() {
-    let service = Service::start(config(&config_text(ZENOH, HTTP, None, "every = 3600"))).await.unwrap();
-    assert_eq!(service.http_addr.to_string(), format!("127.0.0.1:{HTTP}"));
+    let (zport, http) = (free_port(), free_port());
+    let service = Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.unwrap();
+    assert_eq!(service.http_addr.to_string(), format!("127.0.0.1:{http}"));
 
-    let (code, v) = get_json(HTTP, "/healthz").await;
+    let (code, v) = get_json(http, "/healthz").await;
     assert_eq!((code, v["status"].as_str()), (200, Some("ok")));
     assert_eq!(v["controllers"], 1);
 
-    let (code, v) = get_json(HTTP, "/api/v1/controllers").await;
+    let (code, v) = get_json(http, "/api/v1/controllers").await;
     assert_eq!(code, 200);
     assert_eq!(v[0]["id"], "c1");
     assert_eq!(v[0]["window_capacity"], 300);
@@ -42,7 +41,7 @@ async fn http_api_bodies_and_error_codes() {
         ("/api/v1/controllers/c1/trend?mv=u1&cv=zz", 404),
         ("/no/such/path", 404),
     ] {
-        let (code, v) = get_json(HTTP, path).await;
+        let (code, v) = get_json(http, path).await;
         assert_eq!(code, want, "{path}: {v}");
         assert!(v["error"].as_str().is_some_and(|e| !e.is_empty()), "{path}: {v}");
     }
@@ -50,26 +49,26 @@ async fn http_api_bodies_and_error_codes() {
     // An analysis with too little data reports insufficient_data and is not analysed.
     let r = run_once(&service.shared, "c1").await.unwrap();
     assert_eq!(r.status.as_str(), "insufficient_data");
-    let (code, v) = get_json(HTTP, "/api/v1/controllers/c1/matrix").await;
+    let (code, v) = get_json(http, "/api/v1/controllers/c1/matrix").await;
     assert_eq!((code, v["status"].as_str()), (200, Some("insufficient_data")), "{v}");
     assert_eq!(v["needed"], 200);
-    let (code, _) = get_json(HTTP, "/api/v1/controllers/c1/profile?mv=u1&cv=y1").await;
+    let (code, _) = get_json(http, "/api/v1/controllers/c1/profile?mv=u1&cv=y1").await;
     assert_eq!(code, 503);
 
     // Data in through zenoh, then a real run.
-    let s = publisher(ZENOH).await;
-    wait_routed(&s, HTTP).await;
+    let s = publisher(zport).await;
+    wait_routed(&s, http).await;
     let mut toy = Toy::new(5);
     toy.publish(&s, 300, false).await;
     until("a full window", || async {
-        let (_, v) = get_json(HTTP, "/api/v1/controllers/c1").await;
+        let (_, v) = get_json(http, "/api/v1/controllers/c1").await;
         (v["window_len"].as_u64() == Some(300)).then_some(())
     })
     .await;
     let r = run_once(&service.shared, "c1").await.unwrap();
     assert_eq!(r.status.as_str(), "ok", "{:?}", r.message);
 
-    let (code, m) = get_json(HTTP, "/api/v1/controllers/c1/matrix").await;
+    let (code, m) = get_json(http, "/api/v1/controllers/c1/matrix").await;
     assert_eq!(code, 200);
     assert_eq!(m["status"], "ok");
     assert_eq!(m["n"], 300);
@@ -84,7 +83,7 @@ async fn http_api_bodies_and_error_codes() {
     assert_eq!(clean["significant"], false, "{clean}");
 
     for mv in ["u1", "ud1"] {
-        let (code, p) = get_json(HTTP, &format!("/api/v1/controllers/c1/profile?mv={mv}&cv=y1")).await;
+        let (code, p) = get_json(http, &format!("/api/v1/controllers/c1/profile?mv={mv}&cv=y1")).await;
         assert_eq!(code, 200, "{p}");
         assert_eq!(p["lags"], serde_json::json!([1, 2, 3]));
         assert_eq!(p["mi_bits"].as_array().unwrap().len(), 3);
@@ -94,23 +93,23 @@ async fn http_api_bodies_and_error_codes() {
     }
 
     // The family rule's CCF critical values and p-value come with the profile.
-    let (_, p) = get_json(HTTP, "/api/v1/controllers/c1/profile?mv=ud1&cv=y1").await;
+    let (_, p) = get_json(http, "/api/v1/controllers/c1/profile?mv=ud1&cv=y1").await;
     assert_eq!(p["ccf_critical"].as_array().map(Vec::len), Some(3), "{p}");
     assert!(p["p_value"].as_f64().unwrap() <= p["alpha"].as_f64().unwrap(), "{p}");
 
-    let (code, a) = get_json(HTTP, "/api/v1/controllers/c1/alarms?limit=5").await;
+    let (code, a) = get_json(http, "/api/v1/controllers/c1/alarms?limit=5").await;
     assert_eq!(code, 200);
     assert_eq!(a["controller"], "c1");
     assert!(a["history"].as_array().is_some());
 
-    let (code, page) = get(HTTP, "/").await;
+    let (code, page) = get(http, "/").await;
     assert_eq!(code, 200);
     assert!(page.contains("<html") && page.contains("api/v1/controllers"));
     for endpoint in ["/profile?", "/trend?", "/alarms?"] {
         assert!(page.contains(endpoint), "the page draws from {endpoint}");
     }
 
-    let (code, metrics) = get(HTTP, "/metrics").await;
+    let (code, metrics) = get(http, "/metrics").await;
     assert_eq!(code, 200);
     for needle in [
         r#"mpm_norm_mi_bits{controller="c1",mv="u1",dither="ud1",cv="y1"}"#,
@@ -139,7 +138,7 @@ async fn http_api_bodies_and_error_codes() {
     // The trend holds one point per ok run (the insufficient one is not a point).
     let r2 = run_once(&service.shared, "c1").await.unwrap();
     assert_eq!(r2.status.as_str(), "ok");
-    let (code, t) = get_json(HTTP, "/api/v1/controllers/c1/trend?mv=ud1&cv=y1").await;
+    let (code, t) = get_json(http, "/api/v1/controllers/c1/trend?mv=ud1&cv=y1").await;
     assert_eq!(code, 200, "{t}");
     let points = t["points"].as_array().unwrap();
     assert_eq!(points.len(), 2, "{t}");
@@ -148,7 +147,7 @@ async fn http_api_bodies_and_error_codes() {
         "{t}"
     );
     assert_eq!(t["alpha"], 0.001);
-    let (_, t) = get_json(HTTP, "/api/v1/controllers/c1/trend?mv=u2&cv=y2").await;
+    let (_, t) = get_json(http, "/api/v1/controllers/c1/trend?mv=u2&cv=y2").await;
     assert_eq!(t["points"].as_array().unwrap().len(), 2);
     assert!(t["points"].as_array().unwrap().iter().all(|pt| pt["significant"] == false), "{t}");
 

@@ -1,17 +1,16 @@
 //! Every kind of bad input over real zenoh is counted by reason and survived: the monitor keeps
 //! ingesting good samples afterwards.
 
+use crate::fault_support::free_port;
 use crate::service_support::*;
 use mpmwatch_service::Service;
 
-const ZENOH: u16 = 17452;
-const HTTP: u16 = 19452;
-
 #[tokio::test(flavor = "multi_thread")]
 async fn bad_payloads_are_counted_by_reason_and_survived() {
-    let service = Service::start(config(&config_text(ZENOH, HTTP, None, "every = 3600"))).await.unwrap();
-    let s = publisher(ZENOH).await;
-    wait_routed(&s, HTTP).await;
+    let (zport, http) = (free_port(), free_port());
+    let service = Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.unwrap();
+    let s = publisher(zport).await;
+    wait_routed(&s, http).await;
 
     // Good rows 0..=49, then the bad ones. The routing probes left this session before the good
     // rows and one session's samples reach the subscriber in order, so once the rows are in,
@@ -19,7 +18,7 @@ async fn bad_payloads_are_counted_by_reason_and_survived() {
     let mut toy = Toy::new(3);
     toy.publish(&s, 50, true).await;
     let before = until("the good rows", || async {
-        let (_, v) = get_json(HTTP, "/api/v1/controllers/c1").await;
+        let (_, v) = get_json(http, "/api/v1/controllers/c1").await;
         (v["ingested"].as_u64() == Some(50 * 8)).then_some(v)
     })
     .await;
@@ -46,7 +45,7 @@ async fn bad_payloads_are_counted_by_reason_and_survived() {
         s.put(*key, payload.to_vec()).await.unwrap();
     }
     let st = until("the bad samples to be counted", || async {
-        let (_, v) = get_json(HTTP, "/api/v1/controllers/c1").await;
+        let (_, v) = get_json(http, "/api/v1/controllers/c1").await;
         // the last message is a good one; the subscriber handles messages in order
         (v["ingested"].as_u64() == Some(50 * 8 + 2)).then_some(v)
     })
@@ -62,16 +61,16 @@ async fn bad_payloads_are_counted_by_reason_and_survived() {
     assert_eq!(st["ingested"], 50 * 8 + 2, "{st}");
 
     // The same counts in Prometheus text.
-    let (_, m) = get(HTTP, "/metrics").await;
+    let (_, m) = get(http, "/metrics").await;
     assert!(m.contains(r#"mpm_samples_dropped_total{controller="c1",reason="bad_payload"} 5"#), "{m}");
     assert!(m.contains(r#"mpm_samples_dropped_total{controller="c1",reason="non_finite"} 3"#), "{m}");
 
     // Still alive and ingesting: rows 50.. complete the window further.
-    let (code, _) = get(HTTP, "/healthz").await;
+    let (code, _) = get(http, "/healthz").await;
     assert_eq!(code, 200);
     toy.publish(&s, 100, true).await;
     until("good samples after the bad ones", || async {
-        let (_, v) = get_json(HTTP, "/api/v1/controllers/c1").await;
+        let (_, v) = get_json(http, "/api/v1/controllers/c1").await;
         (v["ingested"].as_u64().unwrap_or(0) >= 150 * 8).then_some(())
     })
     .await;

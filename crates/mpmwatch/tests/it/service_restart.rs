@@ -1,7 +1,7 @@
 //! Restart with the windows restored from the SQLite store: the real binary is killed with
 //! SIGKILL (no shutdown flush) and started again on the same store.
 
-use crate::fault_support;
+use crate::fault_support::free_port;
 
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
@@ -28,22 +28,23 @@ async fn window_len(http: u16) -> Option<u64> {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn windows_survive_kill_9() {
+    let (z1, h1, z2, h2) = (free_port(), free_port(), free_port(), free_port());
     let dir = std::env::temp_dir().join(format!("mpmwatch-restart-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
     let first = dir.join("first.toml");
     let second = dir.join("second.toml");
-    std::fs::write(&first, config_text(17453, 19453, Some(&store), "every = 3600")).unwrap();
-    std::fs::write(&second, config_text(17454, 19454, Some(&store), "every = 3600")).unwrap();
+    std::fs::write(&first, config_text(z1, h1, Some(&store), "every = 3600")).unwrap();
+    std::fs::write(&second, config_text(z2, h2, Some(&store), "every = 3600")).unwrap();
 
     let mut child = spawn(&first);
-    until("the first instance's HTTP", || window_len(19453)).await;
-    let s = publisher(17453).await;
-    wait_routed(&s, 19453).await;
+    until("the first instance's HTTP", || window_len(h1)).await;
+    let s = publisher(z1).await;
+    wait_routed(&s, h1).await;
     let mut toy = Toy::new(9);
     toy.publish(&s, 250, true).await;
-    until("250 rows in the window", || async { (window_len(19453).await == Some(250)).then_some(()) }).await;
+    until("250 rows in the window", || async { (window_len(h1).await == Some(250)).then_some(()) }).await;
     // More than the flush interval (100 ms), so the rows are on disk.
     tokio::time::sleep(Duration::from_millis(1500)).await;
     child.kill().expect("SIGKILL"); // kill -9: no shutdown, no final flush
@@ -51,19 +52,19 @@ async fn windows_survive_kill_9() {
     let _ = s.close().await;
 
     let mut child = spawn(&second);
-    let restored = until("the second instance's HTTP", || window_len(19454)).await;
+    let restored = until("the second instance's HTTP", || window_len(h2)).await;
     assert_eq!(restored, 250, "window not restored");
-    let (_, v) = get_json(19454, "/api/v1/controllers/c1").await;
+    let (_, v) = get_json(h2, "/api/v1/controllers/c1").await;
     assert_eq!(v["window_contiguous"], 250);
 
     // It continues where it stopped: the next rows extend the window, old ones are refused.
-    let s = publisher(17454).await;
-    wait_routed(&s, 19454).await;
+    let s = publisher(z2).await;
+    wait_routed(&s, h2).await;
     toy.publish(&s, 50, true).await;
-    until("the window to continue", || async { (window_len(19454).await == Some(300)).then_some(()) }).await;
+    until("the window to continue", || async { (window_len(h2).await == Some(300)).then_some(()) }).await;
     s.put("mpm/c1/cv/y1", r#"{"t": 100, "v": 1}"#).await.unwrap();
     let v = until("the old sample to be refused", || async {
-        let (_, v) = get_json(19454, "/api/v1/controllers/c1").await;
+        let (_, v) = get_json(h2, "/api/v1/controllers/c1").await;
         (v["dropped"]["out_of_order"].as_u64() == Some(1)).then_some(v)
     })
     .await;
@@ -84,12 +85,7 @@ async fn kill_9_mid_ingest_loses_at_most_the_last_flush_interval() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
-    let (z1, h1, z2, h2) = (
-        fault_support::free_port(),
-        fault_support::free_port(),
-        fault_support::free_port(),
-        fault_support::free_port(),
-    );
+    let (z1, h1, z2, h2) = (free_port(), free_port(), free_port(), free_port());
     let cfg = |z: u16, h: u16| {
         config_text(z, h, Some(&store), "every = 3600").replace("window = 300\n", "window = 5000\n")
     };

@@ -6,42 +6,41 @@
 
 use std::time::Duration;
 
+use crate::fault_support::free_port;
 use crate::service_support::*;
 use mpmwatch::loadgen::{self, LoadgenOptions};
 use mpmwatch_service::Service;
 
-const ROUTER: u16 = 17471;
-const HTTP_A: u16 = 19471;
-const HTTP_B: u16 = 19472;
 const CONTROLLERS: usize = 4;
 
-fn instance(http: u16, share: &LoadgenOptions) -> String {
+fn instance(router: u16, http: u16, share: &LoadgenOptions) -> String {
     format!(
-        "[zenoh]\nmode = \"client\"\nconnect = [\"tcp/127.0.0.1:{ROUTER}\"]\n[http]\nbind = \"127.0.0.1:{http}\"\n\n{}",
+        "[zenoh]\nmode = \"client\"\nconnect = [\"tcp/127.0.0.1:{router}\"]\n[http]\nbind = \"127.0.0.1:{http}\"\n\n{}",
         share.controller_toml(
             "window = 512\nmin_samples = 200\nlag_max = 3\nsurrogates = 10\nmethod = \"paper\"\nevery = 3600"
         )
     )
 }
 
-async fn router() -> zenoh::Session {
+async fn router(port: u16) -> zenoh::Session {
     let mut c = zenoh::Config::default();
     c.insert_json5("mode", "\"router\"").unwrap();
     c.insert_json5("scouting/multicast/enabled", "false").unwrap();
-    c.insert_json5("listen/endpoints", &format!("[\"tcp/127.0.0.1:{ROUTER}\"]")).unwrap();
+    c.insert_json5("listen/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]")).unwrap();
     zenoh::open(c).await.expect("router session")
 }
 
-async fn client() -> zenoh::Session {
+async fn client(router: u16) -> zenoh::Session {
     let mut c = zenoh::Config::default();
     c.insert_json5("mode", "\"client\"").unwrap();
     c.insert_json5("scouting/multicast/enabled", "false").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{ROUTER}\"]")).unwrap();
+    c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{router}\"]")).unwrap();
     zenoh::open(c).await.expect("publisher session")
 }
 
 #[tokio::test(flavor = "multi_thread")]
 async fn two_instances_behind_one_router_each_see_only_their_half() {
+    let (port, http_a, http_b) = (free_port(), free_port(), free_port());
     let all = LoadgenOptions {
         controllers: CONTROLLERS,
         batch: 10,
@@ -56,10 +55,10 @@ async fn two_instances_behind_one_router_each_see_only_their_half() {
     let (ids_a, ids_b) = (ids(&half_a), ids(&half_b));
     assert_eq!([ids_a.clone(), ids_b.clone()].concat(), ids(&all));
 
-    let router = router().await;
-    let a = Service::start(config(&instance(HTTP_A, &half_a))).await.unwrap();
-    let b = Service::start(config(&instance(HTTP_B, &half_b))).await.unwrap();
-    let publisher = client().await;
+    let router = router(port).await;
+    let a = Service::start(config(&instance(port, http_a, &half_a))).await.unwrap();
+    let b = Service::start(config(&instance(port, http_b, &half_b))).await.unwrap();
+    let publisher = client(port).await;
     // loadgen waits until every key (all four controllers) has a subscriber through the router.
     let sent = loadgen::run(&publisher, &all).await.expect("loadgen");
     assert_eq!(sent.unmatched_keys, 0, "{sent:?}");
@@ -67,7 +66,7 @@ async fn two_instances_behind_one_router_each_see_only_their_half() {
     let per_controller = sent.rows_per_controller * sent.tags_per_controller as u64;
     assert_eq!(per_controller * CONTROLLERS as u64, sent.samples);
 
-    for (http, mine, theirs) in [(HTTP_A, &ids_a, &ids_b), (HTTP_B, &ids_b, &ids_a)] {
+    for (http, mine, theirs) in [(http_a, &ids_a, &ids_b), (http_b, &ids_b, &ids_a)] {
         let list = until("every sample of this instance's controllers", || async {
             let (_, v) = get_json(http, "/api/v1/controllers").await;
             let done = v.as_array().unwrap().iter().all(|c| c["ingested"].as_u64() == Some(per_controller));
@@ -92,7 +91,7 @@ async fn two_instances_behind_one_router_each_see_only_their_half() {
     }
     // Stay a moment longer: nothing else arrives late (e.g. a second copy through the router).
     tokio::time::sleep(Duration::from_millis(500)).await;
-    for http in [HTTP_A, HTTP_B] {
+    for http in [http_a, http_b] {
         let (_, v) = get_json(http, "/api/v1/controllers").await;
         for c in v.as_array().unwrap() {
             assert_eq!(c["ingested"].as_u64(), Some(per_controller), "{c}");

@@ -14,11 +14,10 @@
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::fault_support::free_port;
 use crate::service_support::*;
 use mpmwatch::loadgen::{self, LoadgenOptions};
 
-const ZENOH: u16 = 17461;
-const HTTP: u16 = 19461;
 const CONTROLLERS: usize = 4;
 const BATCH: usize = 200;
 const QUEUE_MESSAGES: usize = 16;
@@ -58,6 +57,7 @@ fn sum_metric(text: &str, prefix: &str) -> f64 {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
+    let (zport, http) = (free_port(), free_port());
     let opts = LoadgenOptions {
         controllers: CONTROLLERS,
         batch: BATCH,
@@ -70,7 +70,7 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
     std::fs::create_dir_all(&dir).unwrap();
     let cfg_path = dir.join("soak.toml");
     let text = format!(
-        "[zenoh]\nmode = \"peer\"\nlisten = [\"tcp/127.0.0.1:{ZENOH}\"]\n[http]\nbind = \"127.0.0.1:{HTTP}\"\n\
+        "[zenoh]\nmode = \"peer\"\nlisten = [\"tcp/127.0.0.1:{zport}\"]\n[http]\nbind = \"127.0.0.1:{http}\"\n\
          [ingest]\nqueue_messages = {QUEUE_MESSAGES}\nqueue_bytes = {QUEUE_BYTES}\n\n{}",
         opts.controller_toml(&format!(
             "window = {WINDOW}\nmin_samples = 600\nlag_max = 5\nsurrogates = 10\nmethod = \"paper\"\nevery = 5"
@@ -89,20 +89,20 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
     let child = Reaper(child);
     let pid = child.0.id();
     until("the monitor's HTTP API", || async {
-        let ok = tokio::net::TcpStream::connect(("127.0.0.1", HTTP)).await.is_ok();
+        let ok = tokio::net::TcpStream::connect(("127.0.0.1", http)).await.is_ok();
         ok.then_some(())
     })
     .await;
     let rss_start = rss_kib(pid).expect("child RSS");
 
-    let session = publisher(ZENOH).await;
+    let session = publisher(zport).await;
     let sampler = tokio::spawn(async move {
         // (seconds since start, RSS KiB, largest queue length and bytes seen in /metrics)
         let mut samples: Vec<(f64, u64, f64, f64)> = Vec::new();
         let t0 = Instant::now();
         while t0.elapsed() < Duration::from_secs(25) {
             tokio::time::sleep(Duration::from_millis(500)).await;
-            let (_, m) = get(HTTP, "/metrics").await;
+            let (_, m) = get(http, "/metrics").await;
             let q = (0..CONTROLLERS)
                 .map(|i| metric(&m, &format!("mpm_ingest_queue_messages{{controller=\"lg{i:03}\"}}")))
                 .fold(0.0, f64::max);
@@ -126,7 +126,7 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
         (ingested, full, other_drops(m))
     };
     let m = until("every sent sample to be accounted for", || async {
-        let (_, m) = get(HTTP, "/metrics").await;
+        let (_, m) = get(http, "/metrics").await;
         let (ingested, full, other) = accounted(&m);
         (ingested + other + full * BATCH as f64 == expected).then_some(m)
     })
@@ -145,7 +145,7 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
         assert!(*q <= QUEUE_MESSAGES as f64, "queue length {q} > {QUEUE_MESSAGES}");
         assert!(*b <= QUEUE_BYTES as f64, "queue bytes {b} > {QUEUE_BYTES}");
     }
-    let (_, st) = get_json(HTTP, "/api/v1/controllers").await;
+    let (_, st) = get_json(http, "/api/v1/controllers").await;
     for c in st.as_array().unwrap() {
         assert!(c["window_len"].as_u64().unwrap() <= WINDOW as u64, "{c}");
         // Rows wait for every tag's watermark, at most a window of them (then the oldest
