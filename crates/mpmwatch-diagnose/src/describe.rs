@@ -25,10 +25,10 @@ pub fn describe(
             p.insert("gain".into(), k0 * (1.0 + th));
             p.insert("nominal_gain".into(), k0);
             format!(
-                "the gain of {input}→{output} is {:.2}× the model's ({:.3} instead of {:.3})",
+                "the gain of {input}→{output} is {:.2}× the model's ({} instead of {})",
                 1.0 + th,
-                k0 * (1.0 + th),
-                k0
+                num(k0 * (1.0 + th)),
+                num(k0)
             )
         }
         Term::DeadTime(d) => {
@@ -37,9 +37,9 @@ pub fn describe(
             p.insert("dead_time_s".into(), d0 + *d as f64 * ts);
             format!(
                 "{output} answers {input} {} s later than the model says (dead time {} s, not {} s)",
-                fmt(*d as f64 * ts),
-                fmt(d0 + *d as f64 * ts),
-                fmt(d0)
+                num(*d as f64 * ts),
+                num(d0 + *d as f64 * ts),
+                num(d0)
             )
         }
         Term::TimeConstant { p0, p1 } => {
@@ -50,8 +50,8 @@ pub fn describe(
             format!(
                 "the {input}→{output} response is {} than modelled: time constant about {} s instead of {} s",
                 if t1 > t0 { "slower" } else { "faster" },
-                fmt(t1),
-                fmt(t0)
+                num(t1),
+                num(t0)
             )
         }
         Term::MissingCoupling { pole, delay } => {
@@ -60,10 +60,10 @@ pub fn describe(
             p.insert("time_constant_s".into(), tau);
             p.insert("dead_time_s".into(), *delay as f64 * ts);
             format!(
-                "{output} responds to {input} although the model says it does not: gain {:.3}, time constant {} s, dead time {} s",
-                th,
-                fmt(tau),
-                fmt(*delay as f64 * ts)
+                "{output} responds to {input} although the model says it does not: gain {}, time constant {} s, dead time {} s",
+                num(th),
+                num(tau),
+                num(*delay as f64 * ts)
             )
         }
         Term::DeadZone { centre, w } => {
@@ -71,19 +71,19 @@ pub fn describe(
             p.insert("centre".into(), u0 + centre);
             format!(
                 "MV {input} has no effect on {output} inside {} ± {} (a dead zone)",
-                fmt(u0 + centre),
-                fmt(*w)
+                num(u0 + centre),
+                num(*w)
             )
         }
         Term::SaturationIn { lo, hi } => {
             let mut parts = Vec::new();
             if hi.is_finite() {
                 p.insert("upper_limit".into(), u0 + hi);
-                parts.push(format!("above {}", fmt(u0 + hi)));
+                parts.push(format!("above {}", num(u0 + hi)));
             }
             if lo.is_finite() {
                 p.insert("lower_limit".into(), u0 + lo);
-                parts.push(format!("below {}", fmt(u0 + lo)));
+                parts.push(format!("below {}", num(u0 + lo)));
             }
             format!("MV {input} stops acting on {output} {} (an actuator limit)", parts.join(" and "))
         }
@@ -91,11 +91,11 @@ pub fn describe(
             let mut parts = Vec::new();
             if hi.is_finite() {
                 p.insert("upper_limit".into(), *hi);
-                parts.push(format!("above {}", fmt(*hi)));
+                parts.push(format!("above {}", num(*hi)));
             }
             if lo.is_finite() {
                 p.insert("lower_limit".into(), *lo);
-                parts.push(format!("below {}", fmt(*lo)));
+                parts.push(format!("below {}", num(*lo)));
             }
             format!("{output} cannot go {} while the model's can (an overflow or clip)", parts.join(" or "))
         }
@@ -111,20 +111,21 @@ pub fn describe(
             };
             p.insert("centre".into(), c);
             format!(
-                "{output} responds to the {what} of {input}'s move: an extra {th:.3}·({input} − {}){power} through the channel's dynamics, fitted for {input} in [{}, {}] and held at that range's edges beyond it",
-                fmt(c),
-                fmt(lo),
-                fmt(hi)
+                "{output} responds to the {what} of {input}'s move: an extra {}·({input} − {}){power} through the channel's dynamics, fitted for {input} in [{}, {}] and held at that range's edges beyond it",
+                num(th),
+                num(c),
+                num(lo),
+                num(hi)
             )
         }
         Term::CubicOut => {
             p.insert("cubic_stiffness".into(), -th);
             p.insert("centre".into(), ctx.y0);
             format!(
-                "a cubic restoring term is missing: {output} as the model simulates it (before the fitted offset of {}) feeds back −{:.4}·({output} − {})³ into {input}'s channel (a hardening spring)",
-                fmt(f.intercept),
-                -th,
-                fmt(ctx.y0)
+                "a cubic restoring term is missing: {output} as the model simulates it (before the fitted offset of {}) feeds back −{}·({output} − {})³ into {input}'s channel (a hardening spring)",
+                num(f.intercept),
+                num(-th),
+                num(ctx.y0)
             )
         }
         Term::Bilinear(pairs) => {
@@ -140,32 +141,32 @@ pub fn describe(
                 p.insert(format!("input_b_{}", k + 1), b as f64);
             }
             format!(
-                "{output} responds to a product of lagged input moves ({}; inputs numbered in --inputs order), coefficient {:.3}",
+                "{output} responds to a product of lagged input moves ({}; inputs numbered in --inputs order), coefficient {}",
                 names.join(", "),
-                th
+                num(th)
             )
         }
         Term::Backlash(w) => {
             p.insert("width".into(), *w);
             format!(
                 "MV {input} acts on {output} through play of {} (backlash): reversals are lost until the input has moved that far",
-                fmt(*w)
+                num(*w)
             )
         }
         Term::Coulomb { on_change } => {
             p.insert("friction".into(), -th);
             format!(
-                "a constant force of {:.3} (in {input}'s units) opposes the {} of {output} as the model simulates it, before the fitted offset of {} (Coulomb friction)",
-                -th,
+                "a constant force of {} (in {input}'s units) opposes the {} of {output} as the model simulates it, before the fitted offset of {} (Coulomb friction)",
+                num(-th),
                 if *on_change { "motion" } else { "sign" },
-                fmt(f.intercept)
+                num(f.intercept)
             )
         }
         Term::AbsSensor(o) => {
             p.insert("zero_offset".into(), *o);
             format!(
                 "the {output} sensor reads the absolute value of the signal (|x − {}|): it cannot see the sign",
-                fmt(*o)
+                num(*o)
             )
         }
         Term::StateLimit { state, level, spill, spills, .. } => {
@@ -174,7 +175,7 @@ pub fn describe(
             p.insert("level".into(), *level);
             let mut s = format!(
                 "the model's {name} cannot rise above {} (an overflow the model leaves out)",
-                fmt(*level)
+                num(*level)
             );
             if *spills {
                 p.insert("spill_fraction".into(), *spill);
@@ -196,15 +197,46 @@ pub fn describe(
     (s, p)
 }
 
-fn fmt(v: f64) -> String {
+/// A value in the user's units with four significant digits: fixed notation from 0.001 to
+/// below a million, scientific outside, so a gain of 3e-10 (a flow in m³/s on a pressure in bar)
+/// does not print as 0.0000.
+pub(crate) fn num(v: f64) -> String {
     let a = v.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if a >= 100.0 {
-        format!("{v:.0}")
-    } else if a >= 1.0 {
-        format!("{v:.2}")
+    if a == 0.0 || !a.is_finite() {
+        format!("{v}")
     } else {
-        format!("{v:.3}")
+        // The exponent after rounding to four digits: 0.99999 is 1.000e0, not 9.9999e-1.
+        let sci = format!("{v:.3e}");
+        let exp: i32 = sci.rsplit('e').next().and_then(|e| e.parse().ok()).unwrap_or(0);
+        if (-3..6).contains(&exp) {
+            let decimals = (3 - exp).max(0) as usize;
+            format!("{v:.decimals$}")
+        } else {
+            sci
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    /// Four significant digits in fixed notation from 0.001 to below a million, scientific
+    /// outside; the digits are counted after rounding.
+    #[test]
+    fn numbers_keep_four_significant_digits_in_any_units() {
+        let cases = [
+            (0.7339119, "0.7339"),
+            (0.99999999, "1.000"),
+            (509.43, "509.4"),
+            (-12345.6, "-12346"),
+            (0.0012, "0.001200"),
+            (7.3389e-11, "7.339e-11"),
+            (7.3389e11, "7.339e11"),
+            (0.0, "0"),
+        ];
+        for (v, want) in cases {
+            assert_eq!(num(v), want, "{v}");
+        }
     }
 }

@@ -206,6 +206,28 @@ pub(crate) fn validate<'a>(
         ));
     }
     let ts = sample_time(input.time)?;
+    for s in &exc {
+        if let Some(v) = constant(&s.values[..n_train]) {
+            return Err(DiagnoseError::invalid(
+                format!("signal `{}`", s.name),
+                format!(
+                    "it is constant on the training part (every value {v}), so its effect cannot be measured"
+                ),
+            ));
+        }
+    }
+    for s in &input.outputs {
+        for (part, rows) in [("training part", 0..n_train), ("held-out tail", n_train..n)] {
+            if let Some(v) = constant(&s.values[rows]) {
+                return Err(DiagnoseError::invalid(
+                    format!("output `{}`", s.name),
+                    format!(
+                        "it is constant on the {part} (every value {v}); a FIT divides by the output's spread, so it is undefined there"
+                    ),
+                ));
+            }
+        }
+    }
 
     Ok(Checked { exc, n_train, ts })
 }
@@ -222,7 +244,24 @@ fn check(time: &[f64], s: &Signal<'_>) -> Result<(), DiagnoseError> {
     if let Some((index, &value)) = s.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(DiagnoseError::NotFinite { name: s.name.to_string(), index, value });
     }
+    if let Some((index, &value)) = s.values.iter().enumerate().find(|(_, v)| v.abs() > MAX_ABS) {
+        return Err(DiagnoseError::invalid(
+            format!("signal `{}`", s.name),
+            format!(
+                "{value:e} at row {index} is beyond ±{MAX_ABS:e}, where sums of squares overflow; rescale it"
+            ),
+        ));
+    }
     Ok(())
+}
+
+/// The largest magnitude a signal may reach: a sum of a few thousand squares of it stays finite.
+const MAX_ABS: f64 = 1e150;
+
+/// The value of a series whose every value is the same, `None` when it varies (or is empty).
+fn constant(x: &[f64]) -> Option<f64> {
+    let first = *x.first()?;
+    x.iter().all(|&v| v == first).then_some(first)
 }
 
 /// The median spacing of the time axis; it must increase strictly.

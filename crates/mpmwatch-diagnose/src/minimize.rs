@@ -16,7 +16,8 @@ pub fn minimize(
     len: usize,
     blowup: f64,
 ) -> Vec<f64> {
-    let problem = Problem { residual, len, blowup, x: DVector::from_column_slice(x0) };
+    let floor = x0.iter().map(|v| if *v != 0.0 { 1e-3 * v.abs() } else { 1e-3 }).collect();
+    let problem = Problem { residual, len, blowup, x: DVector::from_column_slice(x0), floor };
     let (solved, _) = LevenbergMarquardt::new().with_patience(30).minimize(problem);
     solved.x.as_slice().to_vec()
 }
@@ -50,6 +51,8 @@ struct Problem<'a> {
     len: usize,
     blowup: f64,
     x: DVector<f64>,
+    /// The least magnitude a difference step is taken relative to, per parameter.
+    floor: Vec<f64>,
 }
 
 impl Problem<'_> {
@@ -80,13 +83,15 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 
     /// Forward differences, one evaluation per parameter (the crate's own numerical derivative
     /// re-evaluates once per residual entry, which for a simulation is quadratic in the
-    /// record's length).
+    /// record's length). The step is a millionth of the parameter, or of a thousandth of its
+    /// start when it comes near zero (of 1e-3 for a start at zero): a step fixed in absolute
+    /// terms would cross the whole range of a parameter in small units (a dead zone in m³/s).
     fn jacobian(&self) -> Option<DMatrix<f64>> {
         let r0 = self.residual_at(&self.x);
         let mut j = DMatrix::zeros(r0.len(), self.x.len());
         for k in 0..self.x.len() {
             let mut x = self.x.clone();
-            let h = 1e-6 * self.x[k].abs().max(1e-3);
+            let h = 1e-6 * self.x[k].abs().max(self.floor[k]);
             x[k] += h;
             let r = self.residual_at(&x);
             j.set_column(k, &((r - &r0) / h));

@@ -180,7 +180,8 @@ pub(crate) fn dither_features(exc: &[&[f64]]) -> Vec<Vec<f64>> {
     let mut z = vec![vec![1.0; n]];
     for e in exc {
         let lags: Vec<Vec<f64>> = (0..=20).map(|l| delayed(e, l)).collect();
-        let binary = e.iter().all(|v| (v.abs() - e[0].abs()).abs() < 1e-12);
+        let amp = e.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let binary = e.iter().all(|v| (v.abs() - amp).abs() <= 1e-12 * amp);
         for a in 0..=4 {
             if !binary {
                 z.push(lags[a].iter().map(|v| v * v).collect());

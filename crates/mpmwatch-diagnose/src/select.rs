@@ -342,7 +342,7 @@ fn own_actuator(
             let duc: Vec<f64> = rows.clone().map(|t| uc[t] - uc[t - 1]).collect();
             let m = duc.iter().sum::<f64>() / duc.len().max(1) as f64;
             let sst: f64 = duc.iter().map(|v| (v - m).powi(2)).sum();
-            if sst <= 1e-12 * (1.0 + var_of(&ctx.ut[i])) {
+            if sst == 0.0 || sst <= 1e-12 * var_of(&ctx.ut[i]) {
                 return None;
             }
             let yr: Vec<f64> = rows.clone().map(|t| y[t]).collect();

@@ -1,6 +1,7 @@
 //! A sensor that cannot see direction: it measures the magnitude of the signal (a speed from
 //! counted pulses, a flow from a differential pressure), `ŷ = |x| + offset`.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element};
@@ -56,8 +57,8 @@ impl Element for AbsSensor {
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!(
-                "{output}'s sensor sees the magnitude only, not the direction (|x| with a zero offset of {:.3})",
-                p[0]
+                "{output}'s sensor sees the magnitude only, not the direction (|x| with a zero offset of {})",
+                num(p[0])
             ),
             BTreeMap::from([("zero_offset".into(), p[0])]),
         )

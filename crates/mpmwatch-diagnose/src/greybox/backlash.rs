@@ -1,6 +1,7 @@
 //! Backlash (play): the actuator does not move until the command reverses by more than the
 //! gap.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element, map_input};
@@ -43,7 +44,7 @@ impl Element for Backlash {
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
-            format!("{input} reaches {output} through play of width {:.3} (backlash)", p[0].abs()),
+            format!("{input} reaches {output} through play of width {} (backlash)", num(p[0].abs())),
             BTreeMap::from([("width".into(), p[0].abs())]),
         )
     }

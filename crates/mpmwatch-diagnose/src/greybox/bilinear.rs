@@ -4,6 +4,7 @@
 //! of two successive samples sees how fast the input moves: on a held input it is the square,
 //! on a changing one it is not.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use mpmwatch_core::info::pearson;
@@ -53,7 +54,9 @@ impl Element for Bilinear {
         let (lo, hi) = (p.get(2).copied().unwrap_or(f64::NAN), p.get(3).copied().unwrap_or(f64::NAN));
         (
             format!(
-                "{output} responds to the product of {input}'s deviation with its previous sample's, not only to {input} (a bilinear input term, fitted for {input} in [{lo:.4}, {hi:.4}] and held at that range's edges beyond it)"
+                "{output} responds to the product of {input}'s deviation with its previous sample's, not only to {input} (a bilinear input term, fitted for {input} in [{}, {}] and held at that range's edges beyond it)",
+                num(lo),
+                num(hi)
             ),
             BTreeMap::from([("fitted_range_low".to_string(), lo), ("fitted_range_high".to_string(), hi)]),
         )

@@ -1,6 +1,7 @@
 //! An output that cannot leave `[lo, hi]`: a sensor at the end of its range, a level at an
 //! overflow (a Wiener system's clip).
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element};
@@ -18,7 +19,7 @@ impl Element for ClipSensor {
     }
     fn starts(&self, d: &Data<'_>, _i: usize) -> Vec<Vec<f64>> {
         let (lo, hi) = (d.y_quantile(0.0), d.y_quantile(1.0));
-        let r = (hi - lo).max(1e-12);
+        let r = (hi - lo).max(f64::MIN_POSITIVE);
         let mut out = Vec::new();
         for q in [0.7, 0.85, 0.95] {
             out.push(vec![lo - r, d.y_quantile(q)]);
@@ -38,7 +39,7 @@ impl Element for ClipSensor {
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         (
-            format!("{output} cannot leave [{lo:.3}, {hi:.3}] (a clip or overflow on the output)"),
+            format!("{output} cannot leave [{}, {}] (a clip or overflow on the output)", num(lo), num(hi)),
             BTreeMap::from([("lower".into(), lo), ("upper".into(), hi)]),
         )
     }

@@ -1,6 +1,7 @@
 //! An actuator dead zone: the input has no effect within ±w of its centre, and acts by its
 //! excess beyond.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element, map_input};
@@ -41,9 +42,9 @@ impl Element for DeadZone {
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!(
-                "{input} has no effect on {output} within ±{:.3} of {:.3} (a dead zone)",
-                p[1].abs(),
-                p[0]
+                "{input} has no effect on {output} within ±{} of {} (a dead zone)",
+                num(p[1].abs()),
+                num(p[0])
             ),
             BTreeMap::from([("width".into(), p[1].abs()), ("centre".into(), p[0])]),
         )

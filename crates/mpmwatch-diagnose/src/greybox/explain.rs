@@ -19,6 +19,7 @@
 //! gain (percent of the nominal's prediction RMS), the same numbers not re-argued for that
 //! scale; the gate against the nominal stays the FIT's.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{
@@ -324,8 +325,9 @@ fn linear_change(
         (
             Physics::MissingCoupling,
             format!(
-                "{inp} acts on {out} (steady-state gain {g:.4}, dead time {:.3} s), a path the model leaves out",
-                d_new as f64 * ts
+                "{inp} acts on {out} (steady-state gain {}, dead time {} s), a path the model leaves out",
+                num(g),
+                num(d_new as f64 * ts)
             ),
             BTreeMap::from([("gain".into(), g), ("dead_time_s".into(), d_new as f64 * ts)]),
         )
@@ -360,9 +362,11 @@ fn change(
         return (
             Physics::DeadTime,
             format!(
-                "{inp} reaches {out} after {:.3} s, the model says {:.3} s (dead time {extra:+.3} s)",
-                d_new as f64 * ts,
-                d_old as f64 * ts
+                "{inp} reaches {out} after {} s, the model says {} s (dead time {}{} s)",
+                num(d_new as f64 * ts),
+                num(d_old as f64 * ts),
+                if extra >= 0.0 { "+" } else { "" },
+                num(extra)
             ),
             BTreeMap::from([("extra_dead_time_s".into(), extra)]),
         );
@@ -373,16 +377,20 @@ fn change(
     if log(gain_ratio) >= log(tau_ratio) {
         (
             Physics::Gain,
-            format!("the gain of {inp}→{out} is {g_new:.4}, the model's {g_old:.4} (×{gain_ratio:.2})"),
+            format!(
+                "the gain of {inp}→{out} is {}, the model's {} (×{gain_ratio:.2})",
+                num(g_new),
+                num(g_old)
+            ),
             BTreeMap::from([("gain".into(), g_new), ("model_gain".into(), g_old)]),
         )
     } else {
         (
             Physics::TimeConstant,
             format!(
-                "the time constant of {inp}→{out} is {:.3} s, the model's {:.3} s",
-                tau_new * ts,
-                tau_old * ts
+                "the time constant of {inp}→{out} is {} s, the model's {} s",
+                num(tau_new * ts),
+                num(tau_old * ts)
             ),
             BTreeMap::from([
                 ("time_constant_s".into(), tau_new * ts),

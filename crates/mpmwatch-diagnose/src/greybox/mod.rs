@@ -202,7 +202,7 @@ impl Model<'_> {
         let g0 = self.orders.na + sig * self.orders.nb;
         let gamma = &f.theta[g0..g0 + self.element.feedbacks()];
         let (x_label, (lo, hi), y_label) = self.element.map_axes(d, self.input, input, output);
-        let pad = 0.1 * (hi - lo).max(1e-12);
+        let pad = 0.1 * (hi - lo).max(f64::MIN_POSITIVE);
         let at = |k: usize| lo - pad + (hi - lo + 2.0 * pad) * k as f64 / 200.0;
         // An element with memory is driven up, down and up again over the range; the last two
         // legs, which start from a state the first leg has set, close its loop.
@@ -428,7 +428,7 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
     if starts.is_empty() {
         starts.push(Vec::new());
     }
-    let scale = mpmwatch_core::numerics::std_dev(&d.y[d.train.clone()], 0).max(1e-12);
+    let scale = mpmwatch_core::numerics::std_dev(&d.y[d.train.clone()], 0).max(f64::MIN_POSITIVE);
     let sse = |f: &Fitted| -> Option<f64> {
         let s = model.simulate(f, &d.u, d.y)?;
         let e: f64 = rows.iter().map(|&t| (s[t] - d.y[t]).powi(2)).sum();

@@ -1,6 +1,7 @@
 //! A polynomial static map on an input (a Hammerstein model): power, flow or torque that goes
 //! with the square or the cube of the command (a heater driven by a voltage, a valve).
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element};
@@ -23,7 +24,7 @@ pub struct Polynomial {
 pub(super) fn centring_of(x: &[f64]) -> Vec<f64> {
     let n = x.len().max(1) as f64;
     let m = x.iter().sum::<f64>() / n;
-    let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt().max(1e-12);
+    let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt().max(f64::MIN_POSITIVE);
     let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     vec![m, sd, lo, hi]
@@ -31,7 +32,8 @@ pub(super) fn centring_of(x: &[f64]) -> Vec<f64> {
 
 /// The standardised value whose power the dynamics see for an input `v`, under `p`.
 pub(super) fn standardised(p: &[f64], v: f64) -> f64 {
-    let (m, sd) = (p.first().copied().unwrap_or(0.0), p.get(1).copied().unwrap_or(1.0).max(1e-12));
+    let (m, sd) =
+        (p.first().copied().unwrap_or(0.0), p.get(1).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE));
     let (lo, hi) =
         (p.get(2).copied().unwrap_or(f64::NEG_INFINITY), p.get(3).copied().unwrap_or(f64::INFINITY));
     let v = if lo <= hi { v.clamp(lo, hi) } else { v };
@@ -65,7 +67,7 @@ impl Element for Polynomial {
         let powers = (self.degree - 1) as usize;
         let first = dc.len().checked_sub(powers)?;
         let gain = *dc.get(i)?;
-        if gain.abs() < 1e-12 || !gain.is_finite() {
+        if gain == 0.0 || !gain.is_finite() {
             return None;
         }
         let z = standardised(p, v);
@@ -76,7 +78,9 @@ impl Element for Polynomial {
         let (lo, hi) = (p.get(2).copied().unwrap_or(f64::NAN), p.get(3).copied().unwrap_or(f64::NAN));
         (
             format!(
-                "{output} responds to the {what} of {input}'s deviation, not only to {input} (a static polynomial map on the input, fitted for {input} in [{lo:.4}, {hi:.4}] and held at that range's edges beyond it)"
+                "{output} responds to the {what} of {input}'s deviation, not only to {input} (a static polynomial map on the input, fitted for {input} in [{}, {}] and held at that range's edges beyond it)",
+                num(lo),
+                num(hi)
             ),
             BTreeMap::from([("fitted_range_low".to_string(), lo), ("fitted_range_high".to_string(), hi)]),
         )

@@ -1,5 +1,6 @@
 //! An actuator limit: the input acts only within `[lo, hi]`.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element, map_input};
@@ -19,7 +20,7 @@ impl Element for InputSaturation {
     /// side a range beyond the data.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
         let (lo, hi) = (d.u_quantile(i, 0.0), d.u_quantile(i, 1.0));
-        let r = (hi - lo).max(1e-12);
+        let r = (hi - lo).max(f64::MIN_POSITIVE);
         let mut out = Vec::new();
         for q in [0.7, 0.8, 0.9] {
             out.push(vec![lo - r, d.u_quantile(i, q)]);
@@ -38,7 +39,7 @@ impl Element for InputSaturation {
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         (
-            format!("{input} acts on {output} only within [{lo:.3}, {hi:.3}] (an actuator limit)"),
+            format!("{input} acts on {output} only within [{}, {}] (an actuator limit)", num(lo), num(hi)),
             BTreeMap::from([("lower".into(), lo), ("upper".into(), hi)]),
         )
     }

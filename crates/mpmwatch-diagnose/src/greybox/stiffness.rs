@@ -1,6 +1,7 @@
 //! A hardening (or softening) spring: a force in the cube of the output's deviation fed back
 //! into the dynamics (a Duffing oscillator).
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{Data, Element};
@@ -37,7 +38,7 @@ impl Element for CubicStiffness {
     }
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
-            format!("a force in the cube of {output}'s deviation from {:.3} (a stiffening spring)", p[0]),
+            format!("a force in the cube of {output}'s deviation from {} (a stiffening spring)", num(p[0])),
             BTreeMap::from([("level".into(), p[0])]),
         )
     }

@@ -3,6 +3,7 @@
 //! the rest of the dynamics. Unlike an actuator limit, what is capped is the input's memory, not
 //! its present value, so a long high input saturates where a short one does not.
 
+use crate::describe::num;
 use std::collections::BTreeMap;
 
 use mpmwatch_core::numerics::quantile;
@@ -38,7 +39,7 @@ impl Element for StorageLimit {
     /// percentiles and a lower one at its 10th and 20th, the other side beyond the data.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
         let (lo, hi) = (d.u_quantile(i, 0.0), d.u_quantile(i, 1.0));
-        let r = (hi - lo).max(1e-12);
+        let r = (hi - lo).max(f64::MIN_POSITIVE);
         let mut out = Vec::new();
         for a in POLES {
             let s = store(d.u[i], a, f64::NEG_INFINITY, f64::INFINITY);
@@ -73,7 +74,9 @@ impl Element for StorageLimit {
         };
         (
             format!(
-                "{input} fills a store ({memory}) whose level cannot leave [{lo:.3}, {hi:.3}], and only that level reaches {output} (a storage that overflows: a tank's rim, a relief)"
+                "{input} fills a store ({memory}) whose level cannot leave [{}, {}], and only that level reaches {output} (a storage that overflows: a tank's rim, a relief)",
+                num(lo),
+                num(hi)
             ),
             BTreeMap::from([("pole".into(), p[0]), ("lower".into(), lo), ("upper".into(), hi)]),
         )
