@@ -206,10 +206,13 @@ pub(crate) fn validate<'a>(
         ));
     }
     let ts = sample_time(input.time)?;
-    for s in &exc {
+    // An open-loop record's inputs are their own excitation. In a closed loop a dither may be
+    // held at zero (an MV not excited, Proposition 4); the MI matrix skips it.
+    let own_excitation = if input.excitations.is_none() { exc.as_slice() } else { &[] };
+    for s in own_excitation {
         if let Some(v) = constant(&s.values[..n_train]) {
             return Err(DiagnoseError::invalid(
-                format!("signal `{}`", s.name),
+                format!("input `{}`", s.name),
                 format!(
                     "it is constant on the training part (every value {v}), so its effect cannot be measured"
                 ),

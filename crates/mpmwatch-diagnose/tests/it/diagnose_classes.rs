@@ -134,3 +134,39 @@ fn abs_sensor() {
 fn coulomb_friction_siso() {
     recovers("c21_");
 }
+
+/// The closed-loop path in other units: the 2×2 dead zone (c10) with its inputs and dithers a
+/// million times smaller and its outputs a million times larger (gains of 1e12). Every step is
+/// equivariant under such scalings, so the finding on the planted channel keeps its class and
+/// the held-out FITs (ratios) move by at most the optimiser's stopping tolerance, 0.01 points.
+#[test]
+fn the_closed_loop_diagnosis_does_not_depend_on_the_units() {
+    let spec = casebook_specs(3000, 100).into_iter().find(|s| s.name.starts_with("c10_")).expect("c10");
+    let rec = run(&spec).unwrap();
+    let opts = DiagnoseOptions::default();
+    let times = |x: &[Vec<f64>], k: f64| -> Vec<Vec<f64>> {
+        x.iter().map(|c| c.iter().map(|v| v * k).collect()).collect()
+    };
+    let unit = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &opts).unwrap();
+    let (su, sy) = (1e-6, 1e6);
+    let scaled = diagnose_numbered(
+        &times(&rec.u, su),
+        &times(&rec.d, su),
+        &times(&rec.y, sy),
+        &times(&rec.s, sy),
+        &opts,
+    )
+    .unwrap();
+    let said = |d: &mpmwatch_diagnose::Diagnosis| -> Vec<(String, String, &'static str)> {
+        d.report.findings.iter().map(|f| (f.input.clone(), f.output.clone(), f.physics.name())).collect()
+    };
+    assert_eq!(said(&scaled), said(&unit));
+    for (k, before) in &unit.report.holdout.fit_before_pct {
+        let after = unit.report.holdout.fit_after_pct[k];
+        let (b, a) = (scaled.report.holdout.fit_before_pct[k], scaled.report.holdout.fit_after_pct[k]);
+        assert!(
+            (b - before).abs() < 0.01 && (a - after).abs() < 0.01,
+            "{k}: {before} → {after} vs {b} → {a}"
+        );
+    }
+}
