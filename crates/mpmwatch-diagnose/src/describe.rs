@@ -197,12 +197,14 @@ pub fn describe(
     (s, p)
 }
 
-/// A value in the user's units with four significant digits: fixed notation from 0.001 to
-/// below a million, scientific outside, so a gain of 3e-10 (a flow in m³/s on a pressure in bar)
+/// A value in the user's units with at least four significant digits: fixed notation from
+/// 0.001 to below a million (whole numbers from 1000 up), scientific outside, so a gain of 3e-10 (a flow in m³/s on a pressure in bar)
 /// does not print as 0.0000.
 pub(crate) fn num(v: f64) -> String {
     let a = v.abs();
-    if a == 0.0 || !a.is_finite() {
+    if a == 0.0 {
+        "0".into()
+    } else if !a.is_finite() {
         format!("{v}")
     } else {
         // The exponent after rounding to four digits: 0.99999 is 1.000e0, not 9.9999e-1.
@@ -221,8 +223,8 @@ pub(crate) fn num(v: f64) -> String {
 mod tests {
     use super::num;
 
-    /// Four significant digits in fixed notation from 0.001 to below a million, scientific
-    /// outside; the digits are counted after rounding.
+    /// At least four significant digits, fixed notation from 0.001 to below a million,
+    /// scientific outside; the digits are counted after rounding; a negative zero prints as 0.
     #[test]
     fn numbers_keep_four_significant_digits_in_any_units() {
         let cases = [
@@ -234,6 +236,7 @@ mod tests {
             (7.3389e-11, "7.339e-11"),
             (7.3389e11, "7.339e11"),
             (0.0, "0"),
+            (-0.0, "0"),
         ];
         for (v, want) in cases {
             assert_eq!(num(v), want, "{v}");

@@ -8,8 +8,9 @@ use nalgebra::{DMatrix, DVector};
 /// a lag window) give the minimum-norm solution instead of noise amplified by 1e16.
 const RCOND: f64 = 1e-10;
 
-/// The Euclidean norm of each column of `x` (1 for a column of zeros or one whose norm
-/// overflows). Every solver divides the columns by it before the SVD and the coefficients after,
+/// The Euclidean norm of each column of `x`, taken on the column divided by its largest
+/// magnitude so that squares neither overflow nor underflow (1 for a column of zeros or of
+/// non-finite values). Every solver divides the columns by it before the SVD and the coefficients after,
 /// so [`RCOND`] compares directions, not units: unscaled, a column a trillion times smaller
 /// than another (an input in m³/s beside an output in Pa) falls below the cut-off and its
 /// coefficient is set to zero.
@@ -17,15 +18,16 @@ fn column_scales(x: &DMatrix<f64>) -> DVector<f64> {
     DVector::from_iterator(
         x.ncols(),
         x.column_iter().map(|c| {
-            let n = c.norm();
+            let m = c.amax();
+            let n = if m > 0.0 { m * (c / m).norm() } else { 0.0 };
             if n > 0.0 && n.is_finite() { n } else { 1.0 }
         }),
     )
 }
 
 /// A thin singular-value decomposition `X = U Σ Vᵀ`, computed by faer. nalgebra's own SVD
-/// returns wrong singular values and vectors on some exactly rank-deficient matrices
-/// (dimforge/nalgebra#1172, open): the test `svd_of_collinear_designs_recomposes` shows it on the
+/// returns wrong singular values and vectors on some matrices, exactly rank-deficient ones
+/// among them (dimforge/nalgebra#1172, open): the test `svd_of_collinear_designs_recomposes` shows it on the
 /// duplicated and constant columns that over-parameterised designs have, which is where the
 /// minimum-norm solution matters.
 struct Svd {
@@ -230,7 +232,8 @@ impl BlockLeastSquares {
         let rhs = b.rows(r.start, r.len()).into_owned();
         let w = match hbb.clone().cholesky() {
             Some(ch) => ch.solve(&rhs),
-            None => Svd::new(&hbb).map_or_else(|| DVector::zeros(r.len()), |svd| svd.solve(&rhs, RCOND)),
+            None => Svd::new(&hbb)
+                .map_or_else(|| DVector::zeros(r.len()), |svd| svd.solve(&rhs, svd.max() * RCOND)),
         };
         let mut beta = b - self.h.columns(r.start, r.len()) * w;
         beta.rows_mut(r.start, r.len()).fill(0.0);
@@ -340,7 +343,9 @@ mod tests {
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs());
         let unit = least_squares(&[&a, &b, &ones], &y, 0..n).unwrap();
         let scaled = least_squares(&[&a2, &b2, &ones], &y, 0..n).unwrap();
-        let iv = instrumental(&[&a2, &b2, &ones], &[&a2, &b2, &ones], &y, &rows).unwrap();
+        // Instruments in yet other units than the regressors: the IV solution does not move.
+        let (za, zb): (Vec<f64>, Vec<f64>) = a.iter().zip(&b).map(|(u, v)| (u * 1e6, v * 1e-6)).unzip();
+        let iv = instrumental(&[&a2, &b2, &ones], &[&za, &zb, &ones], &y, &rows).unwrap();
         let bls = BlockLeastSquares::new(&[&a2, &b2, &ones], vec![0..1, 1..3], 0..n).unwrap();
         let blocked = bls.solve(&y);
         for th in [&scaled, &iv, &blocked] {
@@ -386,10 +391,17 @@ mod tests {
                 _ if trial % 3 == 0 => y[r + 5],
                 _ => rnd(),
             });
+            // Every third design cut to its first p − 1 rows: wide (more columns than rows).
+            let x = if trial % 3 == 1 { x.rows(0, p - 1).into_owned() } else { x };
             let svd = Svd::new(&x).unwrap();
             let back = &svd.u * DMatrix::from_diagonal(&svd.s) * svd.v.transpose();
             let err = (back - &x).norm() / x.norm();
             assert!(err < 1e-12, "trial {trial} ({n}×{p}): relative error {err:e}");
+            // `solve` needs orthonormal columns in both factors.
+            for f in [&svd.u, &svd.v] {
+                let off = (f.transpose() * f - DMatrix::identity(f.ncols(), f.ncols())).norm();
+                assert!(off < 1e-12, "trial {trial}: ‖FᵀF − I‖ = {off:e}");
+            }
         }
     }
 
