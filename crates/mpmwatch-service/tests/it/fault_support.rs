@@ -142,4 +142,5 @@ pub async fn wait_routed_again(session: &zenoh::Session, http_port: u16) {
         (probes(v) > before).then_some(())
     })
     .await;
+    super::service_support::settle_probes(http_port).await;
 }

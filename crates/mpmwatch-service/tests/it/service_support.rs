@@ -115,7 +115,8 @@ where
 }
 
 /// Publishes probes on an unknown tag until the monitor counts one: then its subscription is
-/// known to the publisher's session and later samples reach it.
+/// known to the publisher's session and later samples reach it. Returns once the count has
+/// settled, so a caller that reads it as a baseline is not overtaken by a probe still queued.
 pub async fn wait_routed(session: &zenoh::Session, http_port: u16) {
     until("the publisher's samples to reach the monitor", || async {
         session.put("mpm/c1/cv/probe", r#"{"t": 0, "v": 0}"#).await.unwrap();
@@ -123,6 +124,28 @@ pub async fn wait_routed(session: &zenoh::Session, http_port: u16) {
         (v["dropped"]["unknown_tag"].as_u64().unwrap_or(0) > 0).then_some(())
     })
     .await;
+    settle_probes(http_port).await;
+}
+
+/// Waits until the monitor's `unknown_tag` count holds still for 500 ms: a probe sent just
+/// before the first one was counted may still sit in the ingest queue (seen once under load:
+/// a baseline one short).
+pub async fn settle_probes(http_port: u16) {
+    let count = || async {
+        let (_, v) = get_json(http_port, "/api/v1/controllers/c1").await;
+        v["dropped"]["unknown_tag"].as_u64().unwrap_or(0)
+    };
+    let deadline = tokio::time::Instant::now() + HANG_GUARD;
+    let mut last = count().await;
+    loop {
+        tokio::time::sleep(Duration::from_millis(500)).await;
+        let now = count().await;
+        if now == last {
+            return;
+        }
+        assert!(tokio::time::Instant::now() < deadline, "gave up waiting for the probes to settle");
+        last = now;
+    }
 }
 
 /// The toy loop: y1(t) = ud1(t−1) + n1, y2(t) = 0.5·ud2(t−1) + n2 with ±1 dithers. The right
