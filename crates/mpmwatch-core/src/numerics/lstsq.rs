@@ -27,9 +27,10 @@ fn column_scales(x: &DMatrix<f64>) -> DVector<f64> {
 
 /// A thin singular-value decomposition `X = U Σ Vᵀ`, computed by faer. nalgebra's own SVD
 /// returns wrong singular values and vectors on some matrices, exactly rank-deficient ones
-/// among them (dimforge/nalgebra#1172, open): the test `svd_of_collinear_designs_recomposes` shows it on the
-/// duplicated and constant columns that over-parameterised designs have, which is where the
-/// minimum-norm solution matters.
+/// among them (dimforge/nalgebra#1172, open). On the designs of the test
+/// `svd_of_collinear_designs_recomposes` (duplicated and constant columns, where the
+/// minimum-norm solution matters) nalgebra's missed 78 of 1998 (docs/estimators.md); the test
+/// checks this one.
 struct Svd {
     u: DMatrix<f64>,
     s: DVector<f64>,
