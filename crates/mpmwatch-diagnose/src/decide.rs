@@ -52,7 +52,8 @@ pub(crate) fn decide(
     }
     let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
     // The honesty gate: the winner must also raise the plain FIT (what the held-out FIT
-    // measures) on the training part's blocks by a margin on average, as on the grey-box path.
+    // measures) on the training part's blocks by a margin on average, as on the grey-box path,
+    // over the nominal and over the intercept alone, so that an offset does not pass for physics.
     // A closed loop has its own margin (larger by default) and no block is required to gain: there the plain
     // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
     // so small average gains are noise, while large ones that lost on one block held up on the
@@ -165,8 +166,15 @@ fn class_lead(ranked: &[select::Scored]) -> f64 {
     classes.find(|(ph, _)| *ph != top).map_or(f64::INFINITY, |(_, score)| score - top_score)
 }
 
-/// A hypothesis' plain FIT gain over no correction, in points, on each block of the training
-/// part's folds (fitted on the other two): the mean and the smallest.
+/// A hypothesis' plain FIT gain, in points, on each block of the training part's folds (fitted
+/// on the other two): the mean and the smallest. A block's gain is taken over the better of two
+/// references there: the bare nominal, which is what the held-out FIT compares with, and the
+/// null hypothesis, the intercept alone (the residual's mean on the fit rows), which every
+/// correction carries too. Over the bare nominal only, a term that explains nothing would gain
+/// whatever its intercept takes off an offset between the simulation and the record (a slow
+/// disturbance's level, a bias of the nominal), which says nothing about the physics it names;
+/// over the null only, a correction could pass whose intercept makes the block worse than the
+/// nominal the user already has.
 #[derive(Debug, Clone, Copy)]
 struct CvGain {
     mean: f64,
@@ -187,9 +195,11 @@ fn cv_gain(
         let g = crate::fit::fit_hypothesis(ctx, inst, r, f, grid, fit_rows, split.whiten)?;
         let c = simulate::correction(ctx, &g)?;
         let yv = &y[val.clone()];
-        let before: Vec<f64> = val.clone().map(|t| ctx.s[t]).collect();
+        let level = fit_rows.iter().map(|&t| r[t]).sum::<f64>() / fit_rows.len().max(1) as f64;
+        let nominal: Vec<f64> = val.clone().map(|t| ctx.s[t]).collect();
+        let null: Vec<f64> = nominal.iter().map(|v| v + level).collect();
         let after: Vec<f64> = val.clone().map(|t| ctx.s[t] + c[t]).collect();
-        gains.push(fit_pct(yv, &after) - fit_pct(yv, &before));
+        gains.push(fit_pct(yv, &after) - fit_pct(yv, &nominal).max(fit_pct(yv, &null)));
     }
     let mean = gains.iter().sum::<f64>() / gains.len().max(1) as f64;
     let min = gains.iter().copied().fold(f64::INFINITY, f64::min);
@@ -239,5 +249,91 @@ mod tests {
         assert!(gate_passes(&g(2.0, -50.0), 0.0, true, &o));
         assert!(gate_passes(&g(0.5, -3.0), 0.0, false, &o));
         assert!(!gate_passes(&g(0.4, 0.4), f64::INFINITY, false, &o));
+    }
+
+    /// Three validation blocks of a unit-variance nominal output `s` (one-sample delay of a
+    /// white input, seed 3) with the folds the gate uses, each block fitted on the other two.
+    fn gate_blocks(n: usize) -> (OutputCtx, Split, [std::ops::Range<usize>; 3], rand_chacha::ChaCha8Rng) {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let u: Vec<f64> = (0..n).map(|_| StandardNormal.sample(&mut rng)).collect();
+        let ctx = crate::plan::delay_ctx(&u, 1.0);
+        let third = (n - 20) / 3;
+        let blocks = [20..20 + third, 20 + third..20 + 2 * third, 20 + 2 * third..n];
+        let folds = (0..3)
+            .map(|k| {
+                let fit: Vec<usize> = (0..3).filter(|&m| m != k).flat_map(|m| blocks[m].clone()).collect();
+                (fit, blocks[k].clone())
+            })
+            .collect();
+        let split = Split { features: None, fit: 20..n, train: 20..n, folds, closed_loop: true, whiten: 0 };
+        (ctx, split, blocks, rng)
+    }
+
+    /// An offset is not physics. The residual is a constant 2 plus white noise (σ 0.1): a gain
+    /// term fitted to it explains nothing (its coefficient comes out near 0) but carries the
+    /// intercept. Over the bare nominal it would gain about 190 points of FIT (checked, so the
+    /// test can fail); over the better reference, here the intercept alone, it gains only the
+    /// noise of two least-squares fits on about 1320 rows: the coefficient's error is about
+    /// 0.1/√1320 ≈ 0.003, which moves a block's FIT by about 100·δ²/(2·0.1) ≈ 0.005 points, so
+    /// 0.1 leaves room for twenty of those.
+    #[test]
+    fn an_offset_gains_nothing_at_the_gate() {
+        use rand_distr::{Distribution, StandardNormal};
+        let n = 2000;
+        let (ctx, split, blocks, mut rng) = gate_blocks(n);
+        let r: Vec<f64> = (0..n)
+            .map(|_| {
+                let e: f64 = StandardNormal.sample(&mut rng);
+                2.0 + 0.1 * e
+            })
+            .collect();
+        let y: Vec<f64> = ctx.s.iter().zip(&r).map(|(a, b)| a + b).collect();
+        let rows: Vec<usize> = (20..n).collect();
+        let f = crate::fit::fit_term(&ctx, &ctx, &r, 0, Term::Gain, &rows, 0).unwrap();
+        assert!(f.coefs[0].abs() < 0.02, "the gain term should explain nothing: {}", f.coefs[0]);
+        let c = simulate::correction(&ctx, &f).unwrap();
+        let over_nominal = blocks
+            .iter()
+            .map(|b| {
+                let after: Vec<f64> = b.clone().map(|t| ctx.s[t] + c[t]).collect();
+                fit_pct(&y[b.clone()], &after) - fit_pct(&y[b.clone()], &ctx.s[b.clone()])
+            })
+            .sum::<f64>()
+            / 3.0;
+        assert!(over_nominal > 50.0, "the offset alone should gain a lot over the nominal: {over_nominal}");
+        let g = cv_gain(&y, &ctx, &ctx, &r, &f, None, &split).unwrap();
+        assert!(g.mean.abs() < 0.1 && g.min > -0.1, "gain {} (worst block {})", g.mean, g.min);
+    }
+
+    /// The other reference. A real gain error (0.3 of the nominal's output, noise σ 0.1) on a
+    /// record whose last block sits 3 higher: validating the first block, the intercept fitted
+    /// on the other two (about 1.5) puts the correction 1.5 off a block the nominal meets on
+    /// average. Over the intercept alone the term still gains there (it explains 0.3 of a unit
+    /// output), so a gate that asked only that would pass a correction that makes the block
+    /// worse than the nominal the user has; over the better reference that block loses.
+    #[test]
+    fn a_correction_must_also_beat_the_nominal() {
+        use rand_distr::{Distribution, StandardNormal};
+        let n = 2000;
+        let (ctx, split, blocks, mut rng) = gate_blocks(n);
+        let r: Vec<f64> = (0..n)
+            .map(|t| {
+                let e: f64 = StandardNormal.sample(&mut rng);
+                0.3 * ctx.s[t] + 0.1 * e + if blocks[2].contains(&t) { 3.0 } else { 0.0 }
+            })
+            .collect();
+        let y: Vec<f64> = ctx.s.iter().zip(&r).map(|(a, b)| a + b).collect();
+        let (fit_rows, first) = &split.folds[0];
+        let f = crate::fit::fit_term(&ctx, &ctx, &r, 0, Term::Gain, fit_rows, 0).unwrap();
+        let c = simulate::correction(&ctx, &f).unwrap();
+        let level = fit_rows.iter().map(|&t| r[t]).sum::<f64>() / fit_rows.len() as f64;
+        let yv = &y[first.clone()];
+        let after: Vec<f64> = first.clone().map(|t| ctx.s[t] + c[t]).collect();
+        let null: Vec<f64> = first.clone().map(|t| ctx.s[t] + level).collect();
+        assert!(fit_pct(yv, &after) > fit_pct(yv, &null), "the term should beat the intercept alone");
+        let g = cv_gain(&y, &ctx, &ctx, &r, &f, None, &split).unwrap();
+        assert!(g.min < 0.0, "the first block should lose against the nominal: {}", g.min);
     }
 }

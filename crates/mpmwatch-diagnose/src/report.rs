@@ -112,9 +112,10 @@ pub struct Tried {
     /// absent on the grey-box path, which measures only the validation gain.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub score_vs_null: Option<f64>,
-    /// FIT% gain over no correction on held-back training data, points: the mean over the
-    /// three blocks of the training part, each predicted by a fit on the other two (on the
-    /// grey-box path each block's FIT against the block's own mean).
+    /// FIT% gain on held-back training data, points: the mean over the three blocks of the
+    /// training part, each predicted by a fit on the other two; on the residual path over the
+    /// better of the nominal and the null hypothesis (the residual's mean on those rows), on the
+    /// grey-box path over the nominal, each block's FIT against the block's own mean.
     pub validation_gain_pct: f64,
 }
 

@@ -6,6 +6,7 @@ mod cli;
 #[path = "../../../mpmwatch-core/tests/it/common.rs"]
 mod common;
 mod diagnose_explore;
+mod diagnose_paper;
 mod diagnose_physical;
 mod diagnose_real;
 mod diagnose_report;
