@@ -14,7 +14,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::nominal::NominalArx;
+use super::nominal::{NominalArx, PolyChannels};
 use mpmwatch_core::model::DiscreteTf;
 use mpmwatch_core::numerics::{self, lagged as delayed, quantile};
 
@@ -283,9 +283,13 @@ pub struct OutputCtx {
     pub y0: f64,
     /// The nominal model identified from the simulation.
     pub model: NominalArx,
+    /// The nominal's channels as polynomials of the inputs, when the simulation is not linear
+    /// in them ([`crate::nominal::identify_polynomial`]); `None` for a linear nominal.
+    pub poly: Option<PolyChannels>,
     /// Per input: does the model have this channel at all.
     pub has_channel: Vec<bool>,
-    /// Per input: `s_ji`, the model's response to the centred input.
+    /// Per input: `s_ji`, the model's response to the centred input
+    /// ([`OutputCtx::channel_response`]).
     pub s_channel: Vec<Vec<f64>>,
     /// With a physical nominal model: every hypothesis stated by re-running it (state limits,
     /// actuator gains) and its correction (see [`super::physical`]); empty otherwise.
@@ -295,6 +299,18 @@ pub struct OutputCtx {
 }
 
 impl OutputCtx {
+    /// The nominal's response to input `i` moved by `x` from its operating point: through the
+    /// polynomial channels when the nominal has them, else through the linear channel.
+    pub fn channel_response(&self, i: usize, x: &[f64]) -> Vec<f64> {
+        match &self.poly {
+            Some(p) => {
+                let u0 = self.u0[i];
+                p.response(i, &x.iter().map(|v| v + u0).collect::<Vec<_>>(), u0)
+            }
+            None => self.model.channel(i, x),
+        }
+    }
+
     /// The regressor columns of a non-recursive term on input `i` (the intercept is added by the
     /// fitter). For a recursive term: its columns linearised at the nominal simulation (the
     /// first step of the recursion).

@@ -128,7 +128,7 @@ pub(crate) fn output_ctx(u: &[&[f64]], s: &[f64], split: &Split) -> OutputCtx {
     let u0: Vec<f64> = u.iter().map(|x| median(&x[split.train.clone()])).collect();
     let ut: Vec<Vec<f64>> = u.iter().zip(&u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
     let has_channel: Vec<bool> = (0..u.len()).map(|i| model.has_channel(i, u[i], s)).collect();
-    let s_channel: Vec<Vec<f64>> = (0..u.len()).map(|i| model.channel(i, &ut[i])).collect();
+    let poly = nominal::identify_polynomial(u, s, split.train.clone(), &model);
     let u_range = ut
         .iter()
         .map(|x| {
@@ -139,18 +139,21 @@ pub(crate) fn output_ctx(u: &[&[f64]], s: &[f64], split: &Split) -> OutputCtx {
             )
         })
         .collect();
-    OutputCtx {
+    let mut ctx = OutputCtx {
         y0: median(&s[split.train.clone()]),
         ut,
         u0,
         u_range,
         s: s.to_vec(),
         model,
+        poly,
         has_channel,
-        s_channel,
+        s_channel: Vec::new(),
         physical_terms: Vec::new(),
         state_names: Vec::new(),
-    }
+    };
+    ctx.s_channel = (0..u.len()).map(|i| ctx.channel_response(i, &ctx.ut[i])).collect();
+    ctx
 }
 
 /// The dither-driven part of an input: its least-squares projection on the excitations at lags
@@ -217,7 +220,7 @@ pub(crate) fn scoring_ctxs(ctx: &OutputCtx, u: &[&[f64]], u_driven: &[Vec<f64>])
 pub(crate) fn instrument_ctx(ctx: &OutputCtx, u_driven: &[Vec<f64>]) -> OutputCtx {
     let ut: Vec<Vec<f64>> =
         u_driven.iter().zip(&ctx.u0).map(|(x, m)| x.iter().map(|v| v - m).collect()).collect();
-    let s_channel: Vec<Vec<f64>> = (0..ut.len()).map(|i| ctx.model.channel(i, &ut[i])).collect();
+    let s_channel: Vec<Vec<f64>> = (0..ut.len()).map(|i| ctx.channel_response(i, &ut[i])).collect();
     // The level: the model's output at the operating point, `s − Σ s_ji` (constant for a linear
     // model; its mean otherwise). Not the median of `s`: with a skewed input (a loop working
     // against an |x| sensor) the two differ, measured by 0.33 on casebook case c23, which put
