@@ -314,8 +314,8 @@ mod tests {
     /// on the other two (about 1.5) puts the correction 1.5 off a block the nominal meets on
     /// average. Over the intercept alone the term still gains there (it explains 0.3 of a unit
     /// output), so a gate that asked only that would pass a correction that makes the block
-    /// worse than the nominal the user has; over the nominal that block loses, and the gate
-    /// sees it.
+    /// worse than the nominal the user has; over the nominal that block loses, so does the mean,
+    /// and the gate withholds it even with its most lenient class lead.
     #[test]
     fn a_correction_must_also_beat_the_nominal() {
         use rand_distr::{Distribution, StandardNormal};
@@ -338,5 +338,8 @@ mod tests {
         assert!(fit_pct(yv, &after) > fit_pct(yv, &null), "the term should beat the intercept alone");
         let g = cv_gain(&y, &ctx, &ctx, &r, &f, None, &split).unwrap();
         assert!(g.min < 0.0, "the first block should lose against the nominal: {}", g.min);
+        assert!(g.mean < 0.0, "the correction should lose against the nominal on average: {}", g.mean);
+        let lenient = f64::INFINITY;
+        assert!(!gate_passes(&g, lenient, true, &DiagnoseOptions::default()), "the gate passed it: {g:?}");
     }
 }
