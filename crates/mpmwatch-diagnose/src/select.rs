@@ -94,7 +94,9 @@ pub struct Split {
     pub whiten: usize,
 }
 
-/// Scores a fitted term on the validation rows: `n·ln(SSE/n) + penalty·k·ln(n)`.
+/// Scores a fitted term on the validation rows of one fold: `n·ln(SSE/n)` (−2 log-likelihood up
+/// to a constant), with `n` and the complexity `k` the penalty is charged on once over all folds
+/// (see [`rank`]).
 ///
 /// `crit` says what SSE is: [`Criterion::Plain`] (open loop), the squared corrected residual;
 /// [`Criterion::Prediction`], its one-step prediction error under an AR noise model fitted on
@@ -110,8 +112,7 @@ pub fn score(
     f: Option<FittedTerm>,
     fit_rows: &[usize],
     validate: std::ops::Range<usize>,
-    penalty: f64,
-) -> Option<Scored> {
+) -> Option<FoldScore> {
     let (c, complexity) = match &f {
         Some(f) => {
             let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
@@ -161,8 +162,21 @@ pub fn score(
     if !sse.is_finite() || n < 1.0 {
         return None;
     }
-    let score = n * (sse / n).max(1e-300).ln() + penalty * complexity as f64 * n.ln();
-    Some(Scored { fitted: f, sse, complexity, score, grid: None })
+    Some(FoldScore { ll: n * (sse / n).max(1e-300).ln(), sse, rows: n as usize, complexity })
+}
+
+/// One fold's [`score`]: the −2 log-likelihood part `n·ln(SSE/n)`, the SSE, the `n` validation
+/// rows it covers and the hypothesis' complexity.
+#[derive(Debug, Clone, Copy)]
+pub struct FoldScore {
+    /// `n·ln(SSE/n)`.
+    pub ll: f64,
+    /// The criterion's sum of squares.
+    pub sse: f64,
+    /// `n`.
+    pub rows: usize,
+    /// Coefficients plus grid values.
+    pub complexity: usize,
 }
 
 /// One-step prediction of `e` by an AR(`order`) model with a constant, fitted by least squares
@@ -219,9 +233,13 @@ pub fn rank(
         z.extend(nonlinear_dither_features(ctx, inst));
         split.folds.iter().map(|(_, val)| Projector::new(&z, val.clone())).collect()
     });
-    // Each hypothesis: fitted and scored on every fold; its score is the sum over folds.
+    // Each hypothesis: fitted and scored on every fold. The folds' validation blocks tile the
+    // training part, so their log-likelihoods add up to one of its `N` rows, and the BIC charges
+    // `k·ln N` once: charged per fold, each parameter would pay about three times its price and
+    // a class with one more (a dead zone's width, a saturation's second limit) would lose to a
+    // gain that explains less.
     let fold_score = |f: Option<&FittedTerm>, grid: Option<&Term>| -> Option<(f64, f64, usize)> {
-        let mut total = (0.0, 0.0, 0);
+        let (mut ll, mut sse, mut rows, mut complexity) = (0.0, 0.0, 0, 0);
         for (k, (fit_rows, val)) in split.folds.iter().enumerate() {
             let fitted = match f {
                 Some(f) => Some(fit_hypothesis(ctx, inst, r, f, grid, fit_rows, split.whiten)?),
@@ -233,10 +251,10 @@ pub fn rank(
                 (Some(_), None, Scoring::Prediction) => Criterion::Prediction(PREDICTION_ORDER),
                 (Some(_), None, _) => Criterion::Shifted(scoring),
             };
-            let s = score(ctx, crit, r, fitted, fit_rows, val.clone(), penalty)?;
-            total = (total.0 + s.score, total.1 + s.sse, s.complexity);
+            let s = score(ctx, crit, r, fitted, fit_rows, val.clone())?;
+            (ll, sse, rows, complexity) = (ll + s.ll, sse + s.sse, rows + s.rows, s.complexity);
         }
-        Some(total)
+        Some((ll + penalty * complexity as f64 * (rows.max(1) as f64).ln(), sse, complexity))
     };
     let fit_rows: Vec<usize> = split.fit.clone().collect();
     let mut out: Vec<Scored> = Vec::new();
