@@ -7,7 +7,7 @@
 //! "the model's dynamics of channel i→j".
 
 use mpmwatch_core::model::{Arx, ArxOrders, DiscreteTf};
-use mpmwatch_core::numerics::{minus_median, rms};
+use mpmwatch_core::numerics::{median, minus_median, rms};
 
 use super::fitness::fit_pct;
 
@@ -18,6 +18,9 @@ pub struct NominalArx {
     pub arx: Arx,
     /// FIT% of the ARX simulation against the given simulated output (100 for a linear model).
     pub fit_pct: f64,
+    /// The order search's criterion for this model (lower is better; +∞ for the zero model
+    /// returned when no order could be fitted), which [`identify_polynomial`] must beat.
+    pub score: f64,
 }
 
 impl NominalArx {
@@ -89,6 +92,7 @@ pub fn identify(u: &[&[f64]], s: &[f64], rows: std::ops::Range<usize>) -> Nomina
         arx: Arx::new(vec![1.0], vec![vec![0.0]; u.len()], vec![0; u.len()])
             .expect("a zero model is a valid ARX model"),
         fit_pct: f64::NAN,
+        score: f64::INFINITY,
     })
 }
 
@@ -107,7 +111,7 @@ fn search(u: &[&[f64]], s: &[f64], rows: std::ops::Range<usize>) -> Option<(f64,
             if !stable(arx.denominator()) {
                 continue;
             }
-            let m = NominalArx { arx, fit_pct: 0.0 };
+            let m = NominalArx { arx, fit_pct: 0.0, score: f64::INFINITY };
             let sim = m.simulate(u);
             let err: f64 = rows.clone().map(|t| (s[t] - sim[t]).powi(2)).sum::<f64>() / rows.len() as f64;
             let p = (na + nb * u.len() + 1) as f64;
@@ -115,8 +119,10 @@ fn search(u: &[&[f64]], s: &[f64], rows: std::ops::Range<usize>) -> Option<(f64,
             let score =
                 rows.len() as f64 * (err / (scale * scale)).max(1e-12).ln() + p * (rows.len() as f64).ln();
             if best.as_ref().is_none_or(|b| score < b.0) {
-                best =
-                    Some((score, NominalArx { fit_pct: fit_pct(&s[rows.clone()], &sim[rows.clone()]), ..m }));
+                best = Some((
+                    score,
+                    NominalArx { fit_pct: fit_pct(&s[rows.clone()], &sim[rows.clone()]), score, ..m },
+                ));
             }
         }
     }
@@ -133,33 +139,41 @@ const LINEAR_EXACT_PCT: f64 = 99.9;
 
 /// The channels of a simulated output that is not linear in its inputs (a square law, a
 /// Hammerstein model's static maps): a MISO ARX on the powers 1 to [`POLY_DEGREE`] of every
-/// input, `A(q⁻¹) s = Σ_i Σ_k B_ik(q⁻¹) u_iᵏ + c`. Input i's contribution is then what the model
+/// input about its operating point, `A(q⁻¹) s = Σ_i Σ_k B_ik(q⁻¹) z_iᵏ + c` with
+/// `z_i = (u_i − c_i)/d_i` (median and RMS deviation on the rows fitted). Centred and scaled, the
+/// powers stay apart for an input far from zero (a temperature at 350 ± 5: the raw powers of
+/// 345–355 are collinear to a part in 10⁵, and the least-squares cut-off would drop the
+/// curvature). Input i's contribution is then what the model
 /// itself does with that input, so that a change of the channel's gain or time constant is
 /// stated against it: measured against the linear nominal's approximation instead, a gain change
 /// of a square-law channel (the paper's continuous 2×3 plant) is as much a `quadratic` as a gain.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PolyChannels {
     arx: Arx,
+    /// Per input: its centre `c_i` and scale `d_i`.
+    centre: Vec<f64>,
+    scale: Vec<f64>,
 }
 
 impl PolyChannels {
     /// Input i's contribution for the input `x` (in the record's units) relative to the input
-    /// held at `at`: `Σ_k B_ik/A (xᵏ − atᵏ)`, started in steady state.
+    /// held at `at`: `Σ_k B_ik/A (z(x)ᵏ − z(at)ᵏ)`, started in steady state.
     pub fn response(&self, i: usize, x: &[f64], at: f64) -> Vec<f64> {
+        let z = |v: f64| (v - self.centre[i]) / self.scale[i];
         let mut out = vec![0.0; x.len()];
         for k in 1..=POLY_DEGREE {
             let Ok(tf) = self.arx.channel(i * POLY_DEGREE + k - 1) else { continue };
-            let p: Vec<f64> = x.iter().map(|v| v.powi(k as i32) - at.powi(k as i32)).collect();
+            let p: Vec<f64> = x.iter().map(|&v| z(v).powi(k as i32) - z(at).powi(k as i32)).collect();
             out.iter_mut().zip(tf.simulate_from_rest(&p)).for_each(|(o, r)| *o += r);
         }
         out
     }
 }
 
-/// Identifies [`PolyChannels`] of `s` on `rows` when the linear nominal `linear` leaves part of
-/// it unexplained (FIT below [`LINEAR_EXACT_PCT`]) and the polynomial model scores better under
-/// the same order search and penalty (its extra coefficients must pay for themselves); `None`
-/// otherwise.
+/// Identifies [`PolyChannels`] of `s` on `rows` when the linear nominal `linear` (from
+/// [`identify`] on the same rows) leaves part of it unexplained (FIT below [`LINEAR_EXACT_PCT`])
+/// and the polynomial model scores better under the same order search and penalty (its extra
+/// coefficients must pay for themselves); `None` otherwise.
 pub fn identify_polynomial(
     u: &[&[f64]],
     s: &[f64],
@@ -169,14 +183,26 @@ pub fn identify_polynomial(
     if linear.fit_pct.is_nan() || linear.fit_pct >= LINEAR_EXACT_PCT {
         return None;
     }
+    let centre: Vec<f64> = u.iter().map(|x| median(&x[rows.clone()])).collect();
+    // A constant input has no powers to speak of: scale 1 keeps them finite (all zero).
+    let scale: Vec<f64> = u
+        .iter()
+        .zip(&centre)
+        .map(|(x, c)| {
+            let d = rms(&x[rows.clone()].iter().map(|v| v - c).collect::<Vec<_>>());
+            if d > 0.0 && d.is_finite() { d } else { 1.0 }
+        })
+        .collect();
     let powers: Vec<Vec<f64>> = u
         .iter()
-        .flat_map(|x| (1..=POLY_DEGREE).map(move |k| x.iter().map(|v| v.powi(k as i32)).collect()))
+        .zip(centre.iter().zip(&scale))
+        .flat_map(|(x, (c, d))| {
+            (1..=POLY_DEGREE).map(move |k| x.iter().map(|v| ((v - c) / d).powi(k as i32)).collect())
+        })
         .collect();
     let refs: Vec<&[f64]> = powers.iter().map(Vec::as_slice).collect();
-    let (linear_score, _) = search(u, s, rows.clone())?;
     let (score, poly) = search(&refs, s, rows)?;
-    (score < linear_score).then_some(PolyChannels { arx: poly.arx })
+    (score < linear.score).then_some(PolyChannels { arx: poly.arx, centre, scale })
 }
 
 /// Stable when the impulse response of `1/A` decays (checked over a long horizon; cheap and
@@ -236,6 +262,14 @@ mod tests {
         let spread = rms(&minus_median(&want));
         let err = (20..n).map(|t| (got[t] - want[t]).abs()).fold(0.0, f64::max);
         assert!(err < 1e-6 * spread, "largest error {err} against a spread of {spread}");
+        // The same law about an operating point far from zero, u1 at 10⁴ (its raw powers are
+        // collinear to a part in 10⁸): the same accuracy.
+        let far: Vec<f64> = u1.iter().map(|v| v + 1e4).collect();
+        let linear = identify(&[&far, &u2], &s, 0..n);
+        let poly = identify_polynomial(&[&far, &u2], &s, 0..n, &linear).expect("polynomial channels at 1e4");
+        let got = poly.response(0, &far, at + 1e4);
+        let err = (20..n).map(|t| (got[t] - want[t]).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-6 * spread, "at 1e4: largest error {err} against a spread of {spread}");
         let linear_only: Vec<f64> = y2.iter().map(|v| 2.0 * v).collect();
         let m = identify(&[&u1, &u2], &linear_only, 0..n);
         assert!(identify_polynomial(&[&u1, &u2], &linear_only, 0..n, &m).is_none());

@@ -407,7 +407,7 @@ mod tests {
 
     fn nominal(a: Vec<f64>, b: Vec<Vec<f64>>) -> NominalArx {
         let delays = vec![0; b.len()];
-        NominalArx { arx: Arx::new(a, b, delays).unwrap(), fit_pct: 100.0 }
+        NominalArx { arx: Arx::new(a, b, delays).unwrap(), fit_pct: 100.0, score: f64::INFINITY }
     }
 
     /// The nominal's orders read off its coefficients: poles from `A`, the dead time as the
