@@ -17,7 +17,7 @@ pub fn describe(
     let i = f.input;
     let th = f.coefs.first().copied().unwrap_or(0.0);
     let u0 = ctx.u0[i];
-    let k0 = ctx.model.dc_gain(i);
+    let k0 = ctx.dc_gain(i);
     let mut p = BTreeMap::new();
     let s = match &f.term {
         Term::Gain => {
@@ -32,7 +32,7 @@ pub fn describe(
             )
         }
         Term::DeadTime(d) => {
-            let d0 = ctx.model.delay(i) as f64 * ts;
+            let d0 = ctx.delay(i) as f64 * ts;
             p.insert("extra_dead_time_s".into(), *d as f64 * ts);
             p.insert("dead_time_s".into(), d0 + *d as f64 * ts);
             format!(
