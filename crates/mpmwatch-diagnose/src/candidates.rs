@@ -319,7 +319,7 @@ impl OutputCtx {
 
     /// DC gain of input i's channel at the operating point.
     pub fn dc_gain(&self, i: usize) -> f64 {
-        self.channel_tf(i).map_or_else(|| self.model.dc_gain(i), |tf| crate::nominal::dc_gain(&tf))
+        self.channel_tf(i).map_or_else(|| self.model.dc_gain(i), |tf| tf.dc_gain().unwrap_or(f64::NAN))
     }
 
     /// Pure delay of input i's channel, samples.
@@ -478,9 +478,9 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     let s = &ctx.s[rows.clone()];
     out.push(Term::Gain);
     out.extend((1..=8).map(Term::DeadTime));
-    // The dominant pole is the linear nominal's also where polynomial channels exist: read off
-    // their linearisation's step (one denominator shared by every power of every input), the
-    // paper's 3×3 g21 channel, 63 % at 4 samples, reads 5; the linear approximation reads 4.
+    // The dominant pole is the linear nominal's also where polynomial channels exist: their
+    // denominator is shared by every power of every input, so their linearisation's step is a
+    // poor reading of one channel's speed (docs/diagnose.md, stop 40).
     let p0 = ctx.model.dominant_pole(i, 2000);
     let tau0 = -1.0 / p0.ln();
     for rho in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0] {
