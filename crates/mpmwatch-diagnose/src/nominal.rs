@@ -219,11 +219,8 @@ pub fn identify_polynomial(
     // A constant input has no powers to speak of: scale 1 keeps them finite (all zero).
     let scale: Vec<f64> = u
         .iter()
-        .zip(&centre)
-        .map(|(x, c)| {
-            let d = rms(&x[rows.clone()].iter().map(|v| v - c).collect::<Vec<_>>());
-            if d > 0.0 && d.is_finite() { d } else { 1.0 }
-        })
+        .map(|x| rms(&minus_median(&x[rows.clone()])))
+        .map(|d| if d > 0.0 && d.is_finite() { d } else { 1.0 })
         .collect();
     let powers: Vec<Vec<f64>> = u
         .iter()

@@ -109,11 +109,11 @@ pub fn score(
     ctx: &OutputCtx,
     crit: Criterion<'_>,
     r: &[f64],
-    f: Option<FittedTerm>,
+    f: Option<&FittedTerm>,
     fit_rows: &[usize],
     validate: std::ops::Range<usize>,
 ) -> Option<FoldScore> {
-    let (c, complexity) = match &f {
+    let (c, complexity) = match f {
         Some(f) => {
             let free = if f.term.fixed_weight() { 0 } else { f.coefs.len() };
             let c = match crit {
@@ -251,7 +251,7 @@ pub fn rank(
                 (Some(_), None, Scoring::Prediction) => Criterion::Prediction(PREDICTION_ORDER),
                 (Some(_), None, _) => Criterion::Shifted(scoring),
             };
-            let s = score(ctx, crit, r, fitted, fit_rows, val.clone())?;
+            let s = score(ctx, crit, r, fitted.as_ref(), fit_rows, val.clone())?;
             (ll, sse, rows, complexity) = (ll + s.ll, sse + s.sse, rows + s.rows, s.complexity);
         }
         Some((ll + penalty * complexity as f64 * (rows.max(1) as f64).ln(), sse, complexity))
