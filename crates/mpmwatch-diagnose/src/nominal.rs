@@ -67,8 +67,12 @@ impl NominalArx {
 }
 
 /// Dominant pole of a channel: the real pole of a first-order fit of its step response over `n`
-/// samples (time to 63 % of the final value, counted from the first move), clamped to
-/// (0, 0.999).
+/// samples, clamped to (0, 0.999). The fit reads the time constant where the response reaches
+/// 63 % of its final value, counted from the sample before its first move, with the crossing
+/// placed between samples on `ln(1 − y/y∞)`: that logarithm is linear in time for a first-order
+/// lag, `(t − t₀)·ln a`, so a first-order channel with any pure delay gives back its own pole.
+/// A whole-sample count would read a channel of 2.4 samples as 2 (a pole of 0.61 for 0.65), and
+/// a time-constant hypothesis built on that pole cannot cancel the nominal's own.
 pub fn dominant_pole(tf: &DiscreteTf, n: usize) -> f64 {
     let mut x = vec![1.0; n.max(20)];
     x[0] = 0.0;
@@ -79,8 +83,19 @@ pub fn dominant_pole(tf: &DiscreteTf, n: usize) -> f64 {
     }
     let start = step.iter().position(|v| (v / fin).abs() > 1e-9).unwrap_or(0);
     let t63 = step.iter().position(|v| v / fin >= 1.0 - (-1.0f64).exp()).unwrap_or(step.len() - 1);
-    let tau = (t63.saturating_sub(start) as f64).max(0.3);
-    (-1.0 / tau).exp().clamp(1e-3, 0.999)
+    let log_rest = |t: usize| (1.0 - step[t] / fin).max(1e-300).ln();
+    // The sample before the first move has `ln(1 − y/y∞) = 0`; `t63 ≥ start ≥ 1` since the
+    // step is applied at sample 1.
+    let whole = t63.saturating_sub(start) as f64;
+    let tau = match t63.checked_sub(1) {
+        Some(before) if t63 >= start.max(1) => {
+            let (a, b) = (log_rest(before), log_rest(t63));
+            let frac = if b < a { ((-1.0 - a) / (b - a)).clamp(0.0, 1.0) } else { 1.0 };
+            whole + frac
+        }
+        _ => whole,
+    };
+    (-1.0 / tau.max(0.3)).exp().clamp(1e-3, 0.999)
 }
 
 /// Pure delay of a channel in samples: its leading numerator coefficients below 1e-6 of the
@@ -263,6 +278,31 @@ mod tests {
         assert!(m.fit_pct > 99.9, "{m:?}");
         assert!((m.dc_gain(0) - 1.0).abs() < 1e-6 && (m.dc_gain(1) - 1.0).abs() < 1e-6, "{m:?}");
         assert_eq!(m.delay(0), 2);
+    }
+
+    /// A first-order lag `k(1 − a)/(1 − a·q⁻¹)` behind a pure delay gives back its own pole,
+    /// whatever the delay and however fast the lag (the 63 % crossing falls between samples;
+    /// ln of the step's remainder is exactly linear in time, so only rounding is left: 1e-9);
+    /// a second-order channel of two equal poles, whose step is not first-order, reads its 63 %
+    /// time, `2.146·τ₁` for the continuous lag, within one sample (this numerator, `q⁻¹` alone,
+    /// is not the zero-order hold's, which moves the discrete step by about half a sample).
+    #[test]
+    fn the_dominant_pole_of_a_first_order_lag_is_its_pole() {
+        for a in [0.2f64, 0.45, 0.6545, 0.9, 0.98] {
+            for d in [0usize, 1, 3] {
+                let mut b = vec![0.0; d + 1];
+                b[d] = 0.7 * (1.0 - a);
+                let tf = DiscreteTf::new(b, vec![1.0, -a], 0).unwrap();
+                let p = dominant_pole(&tf, 2000);
+                assert!((p - a).abs() < 1e-9, "a {a} delay {d}: read {p}");
+            }
+        }
+        // Two poles at 0.9 (τ₁ = 9.49 samples): (1 + t/τ₁)·e^(−t/τ₁) = e⁻¹ at t = 2.146·τ₁.
+        let p1: f64 = 0.9;
+        let tf = DiscreteTf::new(vec![0.0, (1.0 - p1).powi(2)], vec![1.0, -2.0 * p1, p1 * p1], 0).unwrap();
+        let tau = -1.0 / dominant_pole(&tf, 2000).ln();
+        let want = 2.146 * (-1.0 / p1.ln());
+        assert!((tau - want).abs() < 1.0, "second order: τ {tau} against {want}");
     }
 
     /// A square law on one input and a linear second input, uniform random inputs (seed 11),
