@@ -70,7 +70,8 @@ impl NominalArx {
 /// samples, clamped to (0, 0.999). The fit reads the time constant where the response reaches
 /// 63 % of its final value, counted from the sample before its first move, with the crossing
 /// placed between samples on `ln(1 − y/y∞)`: that logarithm is linear in time for a first-order
-/// lag, `(t − t₀)·ln a`, so a first-order channel with any pure delay gives back its own pole.
+/// lag, `(t − t₀)·ln a`, so a first-order channel with any pure delay gives back its own pole
+/// (while the last of the `n` samples is its final value: for poles up to 0.99 at `n` = 2000).
 /// A whole-sample count would read a channel of 2.4 samples as 2 (a pole of 0.61 for 0.65), and
 /// a time-constant hypothesis built on that pole cannot cancel the nominal's own.
 pub fn dominant_pole(tf: &DiscreteTf, n: usize) -> f64 {

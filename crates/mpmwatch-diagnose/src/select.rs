@@ -49,7 +49,7 @@ pub enum Criterion<'a> {
     /// [`Scoring::Projected`] with the fold's projector.
     Projected(&'a Projector),
     /// [`Scoring::Prediction`] with the noise model: its AR order, and whether it is fitted to
-    /// the residual's first differences (an integrated disturbance, see [`integrated_noise`]).
+    /// the residual's first differences (an integrated disturbance, see [`NoiseModel`]).
     Prediction(NoiseModel),
 }
 
@@ -196,7 +196,8 @@ pub struct FoldScore {
 /// on the rows of `fit_rows` whose `order` past samples are fit rows too (the folds' fit rows
 /// are not contiguous: a row just after the validation block would otherwise regress on
 /// validation samples). Returns the squared prediction error summed over the validation rows
-/// from `order` on, and how many rows that sum covers. With `noise.integrated` the model
+/// from `order` on (`order + 1` for the differenced model), and how many rows that sum covers.
+/// With `noise.integrated` the model
 /// predicts the first difference `e(t) − e(t−1)` from its own past (one more past sample per
 /// row): the prediction error of `e` is then that of its difference, and a level that differs
 /// between the fit rows and the validation block costs nothing beyond its first sample.
@@ -733,14 +734,13 @@ mod tests {
 
     /// One fold of an AR(1) disturbance (pole 0.9, unit innovations, seed 14), validating the
     /// middle of three blocks of 10 000 rows. Stationary, the AR model of the levels predicts it
-    /// better: its error per sample is the innovation's, 1, while an AR(8) of the differences
-    /// cannot undo the unit root that differencing puts in the moving average, and leaves about
-    /// 3.6 % more. With load steps between the blocks (levels 0, +8, −8) the differenced model
-    /// predicts better by about 4 %: one constant fitted over two levels, the model of the levels
-    /// misses the validation block's level on every row, the differenced one on its first row
-    /// only. Both margins come from a reference script (numpy, eight seeds), where the ratio of
-    /// the two errors varied by 0.2 % from seed to seed: the two errors share their innovations.
-    /// `rank` scores each hypothesis under both models.
+    /// better: its error per sample is the innovation's, while an AR(8) of the differences
+    /// cannot undo the unit root that differencing puts in the moving average. With load steps
+    /// between the blocks (levels 0, +8, −8) the differenced model predicts better: one constant
+    /// fitted over two levels, the model of the levels misses the validation block's level on
+    /// every row, the differenced one on its first row only. The two errors share their
+    /// innovations, so their ratio varies little from seed to seed (margins in docs/diagnose.md,
+    /// stop 41). `rank` scores each hypothesis under both models.
     #[test]
     fn the_integrated_noise_model_wins_only_for_a_wandering_disturbance() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(14);
