@@ -11,6 +11,13 @@
 //! - otherwise the finding is `unexplained`, naming the best candidate, its mean gain and its
 //!   worst block's.
 //!
+//! Either finding also needs a corrected model that settles within a validation block: its
+//! slowest pole's time constant shorter than the shortest block. A block checks what a model
+//! does within it; a slower mode sets the level the simulation carries from block to block,
+//! which no block checks and the held-out tail, longer than a block, exposes (a near-integrator
+//! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose.md, stop
+//! 42). A correction that does not settle is withheld as `unexplained`, with its time constant.
+//!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
 //!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
@@ -128,6 +135,19 @@ pub fn explain(
     // by `min_gain` points and lower no block.
     let passes = |v: &CvScore| v.mean - nominal_cv.mean >= min_gain && v.min_gain_over(&nominal_cv) >= 0.0;
     let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
+    let block = folds.iter().map(|f| f.1.len()).min().unwrap_or(0) as f64;
+    // A correction that passed the gate but does not settle within a block: its class, its
+    // slowest time constant in samples and its cross-validated gains (mean, worst block).
+    let mut slow: Option<(Physics, f64, f64, f64)> = None;
+    let mut settles = |m: &Model<'_>, f: &Fitted, physics: Physics, v: &CvScore| {
+        let r = m.slowest_pole(f);
+        let tau = if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() };
+        let ok = tau < block;
+        if !ok && slow.is_none() {
+            slow = Some((physics, tau, v.mean - nominal_cv.mean, v.min_gain_over(&nominal_cv)));
+        }
+        ok
+    };
     let best = scored.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
     let chosen = scored
         .iter()
@@ -141,6 +161,7 @@ pub fn explain(
         let el = els[k].as_ref();
         let m = Model { element: el, input: i, orders: order_sets[o].clone() };
         if let Some(f) = fit(&m, d, &train_rows)
+            && settles(&m, &f, el.physics(), v)
             && let Some(sim) = m.simulate(&f, &d.u, d.y)
         {
             let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
@@ -156,6 +177,7 @@ pub fn explain(
     {
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
         if let Some(f) = fit(&m, d, &train_rows)
+            && settles(&m, &f, Physics::Unexplained, v)
             && let Some(sim) = m.simulate(&f, &d.u, d.y)
         {
             let i = flagged.first().copied().unwrap_or(0);
@@ -171,8 +193,15 @@ pub fn explain(
         }
     }
     let top = scored.iter().max_by(|a, b| rank(&a.0).total_cmp(&rank(&b.0)));
-    let summary = match (top, &linear) {
-        (Some((v, k, ..)), Some((_, lv))) => format!(
+    let summary = match (slow, top, &linear) {
+        (Some((physics, tau, mean, worst)), ..) => format!(
+            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next, so it is not reported",
+            names.output,
+            if physics == Physics::Unexplained { "a re-fitted linear model" } else { physics.name() },
+            if tau.is_finite() { num(tau) } else { "infinite (an integrator or unstable)".to_string() },
+            block,
+        ),
+        (None, Some((v, k, ..)), Some((_, lv))) => format!(
             "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
             names.output,
             els[*k].physics().name(),

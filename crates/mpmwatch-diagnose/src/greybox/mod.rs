@@ -44,6 +44,7 @@ use std::collections::BTreeMap;
 use crate::minimize::minimize;
 
 use super::candidates::{ActsOn, Physics};
+use mpmwatch_core::model::DiscreteTf;
 use mpmwatch_core::numerics::{least_squares_rows, median, quantile};
 
 /// The record an element is fitted to: inputs, output and the training rows' summaries the
@@ -311,6 +312,29 @@ impl Model<'_> {
         (sig, nk)
     }
 
+    /// The largest pole modulus of the fitted linear part (`α`), to 1e-9: the radius below
+    /// which the Schur–Cohn test finds the denominator rescaled by it stable, by bisection
+    /// (the poles of `A(ρ·q⁻¹)` are those of `A` divided by `ρ`).
+    pub fn slowest_pole(&self, f: &Fitted) -> f64 {
+        let alpha = &f.theta[..self.orders.na.min(f.theta.len())];
+        let inside = |rho: f64| {
+            let a: Vec<f64> = std::iter::once(1.0)
+                .chain(alpha.iter().enumerate().map(|(k, c)| -c / rho.powi(k as i32 + 1)))
+                .collect();
+            DiscreteTf::new(vec![1.0], a, 0).is_ok_and(|tf| tf.is_stable())
+        };
+        // Cauchy's bound: every root of z^n − Σ α_k z^(n−k) lies within 1 + max |α_k|.
+        let (mut lo, mut hi) = (0.0, 1.0 + alpha.iter().fold(0.0f64, |m, c| m.max(c.abs())));
+        if !alpha.iter().all(|c| c.is_finite()) {
+            return f64::INFINITY;
+        }
+        while hi - lo > 1e-10 {
+            let mid = 0.5 * (lo + hi);
+            if inside(mid) { hi = mid } else { lo = mid }
+        }
+        hi
+    }
+
     /// Coefficients in `theta`.
     fn n_theta(&self, signals: usize) -> usize {
         self.orders.na + signals * self.orders.nb + self.element.feedbacks() + 1
@@ -505,6 +529,31 @@ pub use structure::{FittedGreyBox, GreyBox, Structure};
 mod tests {
     use super::*;
     use crate::fitness::fit_pct;
+
+    /// The slowest pole against closed forms: a real pole, two real poles (0.8 and 0.7), a
+    /// complex pair of modulus 0.9, an integrator, an unstable pole and a pure delay line
+    /// (pole 0). The bisection stops at 1e-10 on the radius; 1e-9 leaves it a factor of ten.
+    #[test]
+    fn the_slowest_pole_is_the_largest_root_modulus() {
+        let phi: f64 = 0.6;
+        let cases: [(&[f64], f64); 6] = [
+            (&[0.99], 0.99),
+            (&[1.5, -0.56], 0.8),
+            (&[2.0 * 0.9 * phi.cos(), -0.81], 0.9),
+            (&[1.0], 1.0),
+            (&[1.2], 1.2),
+            (&[0.0], 0.0),
+        ];
+        for (alpha, want) in cases {
+            let m =
+                Model { element: &Linear, input: 0, orders: Orders { na: alpha.len(), nb: 1, nk: vec![1] } };
+            let mut theta = alpha.to_vec();
+            theta.extend([0.5, 0.0]);
+            let f = Fitted { p: Vec::new(), theta, noise: Vec::new() };
+            let got = m.slowest_pole(&f);
+            assert!((got - want).abs() < 1e-9, "{alpha:?}: {got} against {want}");
+        }
+    }
 
     /// A noise-free Hammerstein plant, a dead zone of half-width 0.3 before
     /// `x(t) = 0.8 x(t−1) + 0.5 w(t−2)`: the fit from a start at 0.1 recovers the width and the
