@@ -467,6 +467,50 @@ mod tests {
         assert_eq!(rise(&[0.0, 0.0, 1.0]), (2, 0.5));
     }
 
+    /// The settling rule, both ways. A noise-free first-order plant of unit gain on a
+    /// staircase, the nominal `s(t) = 0.9 s(t−1) + 0.1 u(t−1)` (time constant 9.5 samples),
+    /// 1500 rows of which 1050 train in three blocks of 350. The plant's pole 0.95 (time
+    /// constant 19.5 samples) is a time constant, reported; its pole 0.998 (500 samples, longer
+    /// than a block) is the same finding by the blocks' FIT, withheld as `unexplained` with its
+    /// time constant.
+    #[test]
+    fn a_correction_slower_than_a_validation_block_is_withheld() {
+        let n = 1500;
+        let u: Vec<f64> = (0..n).map(|t| ((t / 37 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
+        let first_order = |a: f64| {
+            let mut y = vec![0.0; n];
+            for t in 1..n {
+                y[t] = a * y[t - 1] + (1.0 - a) * u[t - 1];
+            }
+            y
+        };
+        let model = nominal(vec![1.0, -0.9], vec![vec![0.0, 0.1]]);
+        let s = model.simulate(&[&u]);
+        let train = 0..1050;
+        let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> = (0..3)
+            .map(|k| (train.clone().filter(|t| t / 350 != k).collect(), k * 350..(k + 1) * 350))
+            .collect();
+        let names = Names { inputs: vec!["u"], output: "y" };
+        let explained = |y: &[f64]| {
+            let d = Data { u: vec![&u], y, train: train.clone(), nominal: Some(&s), noise_order: 0 };
+            explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, &names).finding
+        };
+
+        let fast = explained(&first_order(0.95));
+        assert_eq!(fast.physics, Physics::TimeConstant, "{}", fast.summary);
+
+        let slow = explained(&first_order(0.998));
+        assert_eq!(slow.physics, Physics::Unexplained, "{}", slow.summary);
+        // The time constant stated is the re-fit's: noise-free, its pole is the plant's to the
+        // optimiser's tolerance, but near 1 a millionth of pole is a quarter sample of time
+        // constant, so it is read to 1 % of the plant's 499.5 samples.
+        let (head, _) =
+            slow.summary.split_once(" samples, is longer than the 350 samples").expect(&slow.summary);
+        let stated: f64 = head.rsplit(' ').next().and_then(|v| v.parse().ok()).expect(&slow.summary);
+        assert!((stated / (-1.0 / 0.998f64.ln()) - 1.0).abs() < 0.01, "{}", slow.summary);
+        assert!(slow.summary.contains("a re-fitted linear model"), "{}", slow.summary);
+    }
+
     #[test]
     fn a_linear_change_draws_both_step_responses() {
         // The model: y(t) = 0.8 y(t−1) + 0.2 u(t−1), unit gain, time constant about 4.5 samples.

@@ -100,6 +100,12 @@ pub trait Element: Sync {
     fn fixed(&self) -> usize {
         0
     }
+    /// Moduli of the element's own poles, for an element with linear memory of its own (a
+    /// store): a corrected model settles only as fast as its slowest pole, the element's
+    /// included ([`Model::slowest_pole`]). Empty by default: a static map has none.
+    fn poles(&self, _p: &[f64]) -> Vec<f64> {
+        Vec::new()
+    }
     /// The signals the linear dynamics see, each with its own numerator: by default the inputs.
     /// `i` is the input the element acts on.
     fn signals(&self, _p: &[f64], u: &[&[f64]], _i: usize) -> Vec<Vec<f64>> {
@@ -312,11 +318,16 @@ impl Model<'_> {
         (sig, nk)
     }
 
-    /// The largest pole modulus of the fitted linear part (`α`), to 1e-9: the radius below
-    /// which the Schur–Cohn test finds the denominator rescaled by it stable, by bisection
-    /// (the poles of `A(ρ·q⁻¹)` are those of `A` divided by `ρ`).
+    /// The largest pole modulus of the corrected model, to 1e-9: the linear part's (`α`) and
+    /// the element's own ([`Element::poles`]), +∞ when a coefficient is not finite. The linear
+    /// part's is the radius below which the Schur–Cohn test finds the denominator rescaled by it
+    /// stable, by bisection (the poles of `A(ρ·q⁻¹)` are those of `A` divided by `ρ`).
     pub fn slowest_pole(&self, f: &Fitted) -> f64 {
         let alpha = &f.theta[..self.orders.na.min(f.theta.len())];
+        let own = self.element.poles(&f.p);
+        if !alpha.iter().chain(&own).all(|c| c.is_finite()) {
+            return f64::INFINITY;
+        }
         let inside = |rho: f64| {
             let a: Vec<f64> = std::iter::once(1.0)
                 .chain(alpha.iter().enumerate().map(|(k, c)| -c / rho.powi(k as i32 + 1)))
@@ -325,14 +336,11 @@ impl Model<'_> {
         };
         // Cauchy's bound: every root of z^n − Σ α_k z^(n−k) lies within 1 + max |α_k|.
         let (mut lo, mut hi) = (0.0, 1.0 + alpha.iter().fold(0.0f64, |m, c| m.max(c.abs())));
-        if !alpha.iter().all(|c| c.is_finite()) {
-            return f64::INFINITY;
-        }
         while hi - lo > 1e-10 {
             let mid = 0.5 * (lo + hi);
             if inside(mid) { hi = mid } else { lo = mid }
         }
-        hi
+        own.iter().fold(hi, |m, r| m.max(r.abs()))
     }
 
     /// Coefficients in `theta`.
@@ -532,7 +540,8 @@ mod tests {
 
     /// The slowest pole against closed forms: a real pole, two real poles (0.8 and 0.7), a
     /// complex pair of modulus 0.9, an integrator, an unstable pole and a pure delay line
-    /// (pole 0). The bisection stops at 1e-10 on the radius; 1e-9 leaves it a factor of ten.
+    /// (pole 0), then a store's own pole beside a linear part. The bisection stops at 1e-10 on
+    /// the radius; 1e-9 leaves it a factor of ten.
     #[test]
     fn the_slowest_pole_is_the_largest_root_modulus() {
         let phi: f64 = 0.6;
@@ -552,6 +561,18 @@ mod tests {
             let f = Fitted { p: Vec::new(), theta, noise: Vec::new() };
             let got = m.slowest_pole(&f);
             assert!((got - want).abs() < 1e-9, "{alpha:?}: {got} against {want}");
+        }
+        // A store's own pole counts: slower than the linear part's 0.5, it is the slowest;
+        // faster, the linear part's is. A non-finite parameter reads as never settling.
+        let m = Model {
+            element: &storage_limit::StorageLimit,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1] },
+        };
+        for (store, want) in [(0.999, 0.999), (0.3, 0.5), (f64::NAN, f64::INFINITY)] {
+            let f = Fitted { p: vec![store, -1.0, 1.0], theta: vec![0.5, 0.5, 0.0], noise: Vec::new() };
+            let got = m.slowest_pole(&f);
+            assert!(got == want || (got - want).abs() < 1e-9, "store {store}: {got} against {want}");
         }
     }
 

@@ -51,6 +51,10 @@ impl Element for StorageLimit {
         }
         out
     }
+    /// The store's own pole `a`: a store that never forgets is as slow as an integrator.
+    fn poles(&self, p: &[f64]) -> Vec<f64> {
+        vec![p[0]]
+    }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         let (lo, hi) = (p[1].min(p[2]), p[1].max(p[2]));
         // A pole outside [0, 1) is no store (at 1 it never forgets, below 0 it alternates):

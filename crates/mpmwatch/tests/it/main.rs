@@ -13,6 +13,7 @@ mod diagnose_report;
 #[path = "../../../mpmwatch-service/tests/it/fault_support.rs"]
 mod fault_support;
 mod reproduce;
+mod serve_process;
 mod service_config;
 mod service_restart;
 mod service_scaleout;

@@ -1,23 +1,11 @@
 //! Restart with the windows restored from the SQLite store: the real binary is killed with
 //! SIGKILL (no shutdown flush) and started again on the same store.
 
-use crate::fault_support::free_port;
-
-use std::process::{Child, Command, Stdio};
+use std::process::Stdio;
 use std::time::Duration;
 
+use crate::serve_process::serve;
 use crate::service_support::*;
-
-fn spawn(config: &std::path::Path) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
-        .args(["serve", "--config"])
-        .arg(config)
-        .env("RUST_LOG", "warn")
-        .stdout(Stdio::null())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .expect("start mpmwatch serve")
-}
 
 async fn window_len(http: u16) -> Option<u64> {
     // Not listening yet (starting, or restored rows still loading): try again later.
@@ -28,17 +16,14 @@ async fn window_len(http: u16) -> Option<u64> {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn windows_survive_kill_9() {
-    let (z1, h1, z2, h2) = (free_port(), free_port(), free_port(), free_port());
     let dir = std::env::temp_dir().join(format!("mpmwatch-restart-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
-    let first = dir.join("first.toml");
-    let second = dir.join("second.toml");
-    std::fs::write(&first, config_text(z1, h1, Some(&store), "every = 3600")).unwrap();
-    std::fs::write(&second, config_text(z2, h2, Some(&store), "every = 3600")).unwrap();
+    let cfg = |z: u16, h: u16| config_text(z, h, Some(&store), "every = 3600");
 
-    let mut child = spawn(&first);
+    let mut first = serve(&dir.join("first.toml"), cfg, Stdio::inherit).await;
+    let (z1, h1) = (first.zenoh, first.http);
     until("the first instance's HTTP", || window_len(h1)).await;
     let s = publisher(z1).await;
     wait_routed(&s, h1).await;
@@ -47,11 +32,11 @@ async fn windows_survive_kill_9() {
     until("250 rows in the window", || async { (window_len(h1).await == Some(250)).then_some(()) }).await;
     // More than the flush interval (100 ms), so the rows are on disk.
     tokio::time::sleep(Duration::from_millis(1500)).await;
-    child.kill().expect("SIGKILL"); // kill -9: no shutdown, no final flush
-    let _ = child.wait();
+    first.kill(); // kill -9: no shutdown, no final flush
     let _ = s.close().await;
 
-    let mut child = spawn(&second);
+    let second = serve(&dir.join("second.toml"), cfg, Stdio::inherit).await;
+    let (z2, h2) = (second.zenoh, second.http);
     let restored = until("the second instance's HTTP", || window_len(h2)).await;
     assert_eq!(restored, 250, "window not restored");
     let (_, v) = get_json(h2, "/api/v1/controllers/c1").await;
@@ -70,8 +55,7 @@ async fn windows_survive_kill_9() {
     .await;
     assert_eq!(v["window_contiguous"], 300);
     let _ = s.close().await;
-    child.kill().unwrap();
-    let _ = child.wait();
+    drop(second);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -85,15 +69,12 @@ async fn kill_9_mid_ingest_loses_at_most_the_last_flush_interval() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
-    let (z1, h1, z2, h2) = (free_port(), free_port(), free_port(), free_port());
     let cfg = |z: u16, h: u16| {
         config_text(z, h, Some(&store), "every = 3600").replace("window = 300\n", "window = 5000\n")
     };
-    let (first, second) = (dir.join("first.toml"), dir.join("second.toml"));
-    std::fs::write(&first, cfg(z1, h1)).unwrap();
-    std::fs::write(&second, cfg(z2, h2)).unwrap();
 
-    let mut child = spawn(&first);
+    let mut first = serve(&dir.join("first.toml"), cfg, Stdio::inherit).await;
+    let (z1, h1) = (first.zenoh, first.http);
     until("the first instance's HTTP", || window_len(h1)).await;
     let s = publisher(z1).await;
     wait_routed(&s, h1).await;
@@ -115,19 +96,18 @@ async fn kill_9_mid_ingest_loses_at_most_the_last_flush_interval() {
     tokio::time::sleep(Duration::from_millis(1000)).await;
     let before_kill = window_len(h1).await.expect("first instance");
     assert!(before_kill > seen, "ingestion must still be running at the kill");
-    child.kill().expect("SIGKILL");
-    let _ = child.wait();
+    first.kill();
     let _ = stop_tx.send(true);
     let published = feeder.await.unwrap() as u64;
 
-    let mut child = spawn(&second);
+    let second = serve(&dir.join("second.toml"), cfg, Stdio::inherit).await;
+    let h2 = second.http;
     let restored = until("the second instance's HTTP", || window_len(h2)).await;
     eprintln!("accepted {seen} rows 1 s before the kill, {before_kill} just before it; {restored} restored");
     assert!(restored >= seen, "lost rows accepted a second before the kill: {restored} < {seen}");
     assert!(restored <= published, "restored rows that were never published");
     let (_, v) = get_json(h2, "/api/v1/controllers/c1").await;
     assert_eq!(v["window_contiguous"].as_u64(), Some(restored), "restored rows are contiguous");
-    child.kill().unwrap();
-    let _ = child.wait();
+    drop(second);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -11,10 +11,10 @@
 //!
 //! No wall-clock performance is asserted: a slow machine only drops more.
 
-use std::process::{Child, Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-use crate::fault_support::free_port;
+use crate::serve_process::serve;
 use crate::service_support::*;
 use mpmwatch::loadgen::{self, LoadgenOptions};
 
@@ -23,16 +23,6 @@ const BATCH: usize = 200;
 const QUEUE_MESSAGES: usize = 16;
 const QUEUE_BYTES: usize = 256 * 1024;
 const WINDOW: usize = 1024;
-
-/// Kills the child on every exit path, panics included.
-struct Reaper(Child);
-
-impl Drop for Reaper {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn rss_kib(pid: u32) -> Option<u64> {
     let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
@@ -57,7 +47,6 @@ fn sum_metric(text: &str, prefix: &str) -> f64 {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
-    let (zport, http) = (free_port(), free_port());
     let opts = LoadgenOptions {
         controllers: CONTROLLERS,
         batch: BATCH,
@@ -68,31 +57,19 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
     };
     let dir = std::env::temp_dir().join(format!("mpmwatch-soak-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let cfg_path = dir.join("soak.toml");
-    let text = format!(
-        "[zenoh]\nmode = \"peer\"\nlisten = [\"tcp/127.0.0.1:{zport}\"]\n[http]\nbind = \"127.0.0.1:{http}\"\n\
-         [ingest]\nqueue_messages = {QUEUE_MESSAGES}\nqueue_bytes = {QUEUE_BYTES}\n\n{}",
-        opts.controller_toml(&format!(
-            "window = {WINDOW}\nmin_samples = 600\nlag_max = 5\nsurrogates = 10\nmethod = \"paper\"\nevery = 5"
-        ))
-    );
-    config(&text); // valid before the child sees it
-    std::fs::write(&cfg_path, &text).unwrap();
-    let child = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
-        .args(["serve", "--config"])
-        .arg(&cfg_path)
-        .env("RUST_LOG", "warn")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start mpmwatch serve");
-    let child = Reaper(child);
-    let pid = child.0.id();
-    until("the monitor's HTTP API", || async {
-        let ok = tokio::net::TcpStream::connect(("127.0.0.1", http)).await.is_ok();
-        ok.then_some(())
-    })
-    .await;
+    let text = |zport: u16, http: u16| {
+        let text = format!(
+            "[zenoh]\nmode = \"peer\"\nlisten = [\"tcp/127.0.0.1:{zport}\"]\n[http]\nbind = \"127.0.0.1:{http}\"\n\
+             [ingest]\nqueue_messages = {QUEUE_MESSAGES}\nqueue_bytes = {QUEUE_BYTES}\n\n{}",
+            opts.controller_toml(&format!(
+                "window = {WINDOW}\nmin_samples = 600\nlag_max = 5\nsurrogates = 10\nmethod = \"paper\"\nevery = 5"
+            ))
+        );
+        config(&text); // valid before the child sees it
+        text
+    };
+    let child = serve(&dir.join("soak.toml"), text, Stdio::null).await;
+    let (zport, http, pid) = (child.zenoh, child.http, child.child.id());
     let rss_start = rss_kib(pid).expect("child RSS");
 
     let session = publisher(zport).await;
