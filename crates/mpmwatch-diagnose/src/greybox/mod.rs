@@ -100,9 +100,11 @@ pub trait Element: Sync {
     fn fixed(&self) -> usize {
         0
     }
-    /// Moduli of the element's own poles, for an element with linear memory of its own (a
-    /// store): a corrected model settles only as fast as its slowest pole, the element's
-    /// included ([`Model::slowest_pole`]). Empty by default: a static map has none.
+    /// The element's own poles, for an element with linear memory of its own (a store): a
+    /// corrected model settles only as fast as its slowest pole, the element's included
+    /// ([`Model::slowest_pole`]). Empty by default: a static map has none, nor has a memory
+    /// without a decaying mode (backlash). A feedback element (cubic stiffness) moves the
+    /// linear part's poles with the operating point instead, which is not read here.
     fn poles(&self, _p: &[f64]) -> Vec<f64> {
         Vec::new()
     }
@@ -319,7 +321,8 @@ impl Model<'_> {
     }
 
     /// The largest pole modulus of the corrected model, to 1e-9: the linear part's (`α`) and
-    /// the element's own ([`Element::poles`]), +∞ when a coefficient is not finite. The linear
+    /// the element's own ([`Element::poles`]), +∞ when one of those is not finite. Feedback
+    /// forces (`γ`) are not linearised into it. The linear
     /// part's is the radius below which the Schur–Cohn test finds the denominator rescaled by it
     /// stable, by bisection (the poles of `A(ρ·q⁻¹)` are those of `A` divided by `ρ`).
     pub fn slowest_pole(&self, f: &Fitted) -> f64 {

@@ -1,7 +1,6 @@
 //! Restart with the windows restored from the SQLite store: the real binary is killed with
 //! SIGKILL (no shutdown flush) and started again on the same store.
 
-use std::process::Stdio;
 use std::time::Duration;
 
 use crate::serve_process::serve;
@@ -22,7 +21,7 @@ async fn windows_survive_kill_9() {
     let store = dir.join("store.sqlite");
     let cfg = |z: u16, h: u16| config_text(z, h, Some(&store), "every = 3600");
 
-    let mut first = serve(&dir.join("first.toml"), cfg, Stdio::inherit).await;
+    let mut first = serve(&dir.join("first.toml"), cfg, true).await;
     let (z1, h1) = (first.zenoh, first.http);
     until("the first instance's HTTP", || window_len(h1)).await;
     let s = publisher(z1).await;
@@ -35,7 +34,7 @@ async fn windows_survive_kill_9() {
     first.kill(); // kill -9: no shutdown, no final flush
     let _ = s.close().await;
 
-    let second = serve(&dir.join("second.toml"), cfg, Stdio::inherit).await;
+    let second = serve(&dir.join("second.toml"), cfg, true).await;
     let (z2, h2) = (second.zenoh, second.http);
     let restored = until("the second instance's HTTP", || window_len(h2)).await;
     assert_eq!(restored, 250, "window not restored");
@@ -73,7 +72,7 @@ async fn kill_9_mid_ingest_loses_at_most_the_last_flush_interval() {
         config_text(z, h, Some(&store), "every = 3600").replace("window = 300\n", "window = 5000\n")
     };
 
-    let mut first = serve(&dir.join("first.toml"), cfg, Stdio::inherit).await;
+    let mut first = serve(&dir.join("first.toml"), cfg, true).await;
     let (z1, h1) = (first.zenoh, first.http);
     until("the first instance's HTTP", || window_len(h1)).await;
     let s = publisher(z1).await;
@@ -100,7 +99,7 @@ async fn kill_9_mid_ingest_loses_at_most_the_last_flush_interval() {
     let _ = stop_tx.send(true);
     let published = feeder.await.unwrap() as u64;
 
-    let second = serve(&dir.join("second.toml"), cfg, Stdio::inherit).await;
+    let second = serve(&dir.join("second.toml"), cfg, true).await;
     let h2 = second.http;
     let restored = until("the second instance's HTTP", || window_len(h2)).await;
     eprintln!("accepted {seen} rows 1 s before the kill, {before_kill} just before it; {restored} restored");

@@ -11,7 +11,6 @@
 //!
 //! No wall-clock performance is asserted: a slow machine only drops more.
 
-use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use crate::serve_process::serve;
@@ -68,7 +67,7 @@ async fn overload_is_dropped_and_counted_and_memory_stays_bounded() {
         config(&text); // valid before the child sees it
         text
     };
-    let child = serve(&dir.join("soak.toml"), text, Stdio::null).await;
+    let child = serve(&dir.join("soak.toml"), text, false).await;
     let (zport, http, pid) = (child.zenoh, child.http, child.child.id());
     let rss_start = rss_kib(pid).expect("child RSS");
 
