@@ -35,6 +35,25 @@ impl Element for Coulomb {
     fn feedbacks(&self) -> usize {
         1
     }
+    /// Friction stops a motion but never reverses it, and a body at rest moves only when the
+    /// drive beats the friction (sticking, as a real Coulomb contact does; without it the
+    /// simulated body chatters about rest under any drive weaker than the friction). A fitted
+    /// force along the motion (`γ ≥ 0`) is no friction and is left as it is.
+    fn constrain(&self, p: &[f64], gamma: &[f64], free: f64, forced: f64, x1: f64, x2: f64) -> f64 {
+        let g = gamma[0];
+        if g.is_nan() || g >= 0.0 {
+            return forced;
+        }
+        let (rest, motion) = if self.on_change { (x1, x1 - x2) } else { (p[0], x1 - p[0]) };
+        if motion == 0.0 {
+            let drive = free - rest;
+            if drive.abs() <= -g { rest } else { free + g * drive.signum() }
+        } else if (forced - rest) * motion <= 0.0 {
+            rest
+        } else {
+            forced
+        }
+    }
     fn map_at(&self, p: &[f64], gamma: &[f64], v: f64) -> Option<f64> {
         let m = if self.on_change { v } else { v - p[0] };
         Some(gamma[0] * if m == 0.0 { 0.0 } else { m.signum() })
@@ -53,5 +72,34 @@ impl Element for Coulomb {
     fn describe(&self, _p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let what = if self.on_change { "the change of" } else { "the sign of" };
         (format!("a constant force against {what} {output} (Coulomb friction)"), BTreeMap::new())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sticking rule on a velocity at rest at 0.1, friction γ = −0.3 per sample: a drive
+    /// of 0.2 from rest stays at rest, one of 0.5 moves by what beats the friction (0.2); a
+    /// motion the friction would reverse stops at rest, one it only slows goes on; a fitted
+    /// force along the motion is left as it is.
+    #[test]
+    fn friction_stops_a_motion_but_never_reverses_it() {
+        let c = Coulomb { on_change: false };
+        let (p, g) = ([0.1], [-0.3]);
+        let at_rest = |free: f64| c.constrain(&p, &g, free, free, 0.1, 0.1);
+        assert_eq!(at_rest(0.3), 0.1);
+        assert_eq!(at_rest(-0.1), 0.1);
+        assert!((at_rest(0.6) - 0.3).abs() < 1e-12);
+        assert!((at_rest(-0.4) - (-0.1)).abs() < 1e-12);
+        // Moving up (x1 = 0.2): friction pulls the prediction 0.25 down to −0.05, past rest.
+        assert_eq!(c.constrain(&p, &g, 0.25, -0.05, 0.2, 0.15), 0.1);
+        assert_eq!(c.constrain(&p, &g, 0.55, 0.25, 0.2, 0.15), 0.25);
+        assert_eq!(c.constrain(&p, &[0.3], 0.25, -0.05, 0.2, 0.15), -0.05);
+        // A position: at rest when it did not change; the rest is where it stands.
+        let c = Coulomb { on_change: true };
+        assert_eq!(c.constrain(&[], &g, 2.2, 2.2, 2.0, 2.0), 2.0);
+        assert!((c.constrain(&[], &g, 2.5, 2.5, 2.0, 2.0) - 2.2).abs() < 1e-12);
+        assert_eq!(c.constrain(&[], &g, 2.1, 1.9, 2.0, 1.8), 2.0);
     }
 }

@@ -115,6 +115,12 @@ pub trait Element: Sync {
     }
     /// Forces fed back from the simulated output (`x(t−1)`, `x(t−2)`).
     fn feedback(&self, _p: &[f64], _x1: f64, _x2: f64, _out: &mut Vec<f64>) {}
+    /// The next output once the fed-back forces have acted: `free` without them, `forced`
+    /// with them weighted by their fitted coefficients `gamma`, `x1` and `x2` the two before.
+    /// By default `forced`; friction uses it to stop a motion rather than reverse it.
+    fn constrain(&self, _p: &[f64], _gamma: &[f64], _free: f64, forced: f64, _x1: f64, _x2: f64) -> f64 {
+        forced
+    }
     /// How many forces [`Element::feedback`] returns.
     fn feedbacks(&self) -> usize {
         0
@@ -388,9 +394,9 @@ impl Model<'_> {
             if nf > 0 {
                 fb.clear();
                 self.element.feedback(&f.p, x[t - 1], x[t - 2], &mut fb);
-                for (m, g) in fb.iter().enumerate() {
-                    v += f.theta[fb0 + m] * g;
-                }
+                let gamma = &f.theta[fb0..fb0 + nf];
+                let forced = v + fb.iter().zip(gamma).map(|(g, c)| c * g).sum::<f64>();
+                v = self.element.constrain(&f.p, gamma, v, forced, x[t - 1], x[t - 2]);
             }
             if !v.is_finite() || v.abs() > bound {
                 return None;
