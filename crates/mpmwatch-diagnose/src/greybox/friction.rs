@@ -1,5 +1,6 @@
 //! Coulomb friction: a constant force against the direction of motion, fed back into the
-//! dynamics. The output is the velocity (`sign(x − v0)`) or a position (`sign(Δx)`).
+//! dynamics, that holds a body at rest until the drive beats it (stick–slip). The output is the
+//! velocity (`sign(x − v0)`) or a position (`sign(Δx)`).
 
 use std::collections::BTreeMap;
 
@@ -35,24 +36,24 @@ impl Element for Coulomb {
     fn feedbacks(&self) -> usize {
         1
     }
-    /// Friction stops a motion but never reverses it, and a body at rest moves only when the
-    /// drive beats the friction (sticking, as a real Coulomb contact does; without it the
-    /// simulated body chatters about rest under any drive weaker than the friction). A fitted
-    /// force along the motion (`γ ≥ 0`) is no friction and is left as it is.
+    /// Stick–slip: a body at rest moves only when the drive (the step without the friction,
+    /// measured from rest) beats the friction, and a step that carries the motion through rest
+    /// is taken again from rest, so the friction alone stops a motion but never reverses it,
+    /// while a drive stronger than the friction reverses it. Without this the simulated body
+    /// chatters about rest under any drive weaker than the friction, where a real Coulomb
+    /// contact sticks. A fitted force along the motion (`γ ≥ 0`) is no friction and is left
+    /// as it is.
     fn constrain(&self, p: &[f64], gamma: &[f64], free: f64, forced: f64, x1: f64, x2: f64) -> f64 {
         let g = gamma[0];
         if g.is_nan() || g >= 0.0 {
             return forced;
         }
         let (rest, motion) = if self.on_change { (x1, x1 - x2) } else { (p[0], x1 - p[0]) };
-        if motion == 0.0 {
-            let drive = free - rest;
-            if drive.abs() <= -g { rest } else { free + g * drive.signum() }
-        } else if (forced - rest) * motion <= 0.0 {
-            rest
-        } else {
-            forced
+        if motion != 0.0 && (forced - rest) * motion > 0.0 {
+            return forced;
         }
+        let drive = free - rest;
+        if drive.abs() <= -g { rest } else { free + g * drive.signum() }
     }
     fn map_at(&self, p: &[f64], gamma: &[f64], v: f64) -> Option<f64> {
         let m = if self.on_change { v } else { v - p[0] };
@@ -81,10 +82,11 @@ mod tests {
 
     /// The sticking rule on a velocity at rest at 0.1, friction γ = −0.3 per sample: a drive
     /// of 0.2 from rest stays at rest, one of 0.5 moves by what beats the friction (0.2); a
-    /// motion the friction would reverse stops at rest, one it only slows goes on; a fitted
+    /// motion the friction would reverse stops at rest, one it only slows goes on, one a
+    /// drive stronger than the friction reverses is reversed (taken again from rest); a fitted
     /// force along the motion is left as it is.
     #[test]
-    fn friction_stops_a_motion_but_never_reverses_it() {
+    fn friction_sticks_at_rest_and_alone_never_reverses_a_motion() {
         let c = Coulomb { on_change: false };
         let (p, g) = ([0.1], [-0.3]);
         let at_rest = |free: f64| c.constrain(&p, &g, free, free, 0.1, 0.1);
@@ -95,6 +97,13 @@ mod tests {
         // Moving up (x1 = 0.2): friction pulls the prediction 0.25 down to −0.05, past rest.
         assert_eq!(c.constrain(&p, &g, 0.25, -0.05, 0.2, 0.15), 0.1);
         assert_eq!(c.constrain(&p, &g, 0.55, 0.25, 0.2, 0.15), 0.25);
+        // The drive itself reverses it: free −0.5 is 0.6 below rest, 0.3 beyond the friction;
+        // a reversing drive of 0.1, within the friction, leaves it at rest.
+        assert!((c.constrain(&p, &g, -0.5, -0.8, 0.2, 0.15) - (-0.2)).abs() < 1e-12);
+        assert_eq!(c.constrain(&p, &g, 0.0, -0.3, 0.2, 0.15), 0.1);
+        // Moving down (x1 = −0.1): the mirror image.
+        assert_eq!(c.constrain(&p, &g, -0.05, 0.25, -0.1, -0.05), 0.1);
+        assert_eq!(c.constrain(&p, &g, -0.5, -0.2, -0.1, -0.05), -0.2);
         assert_eq!(c.constrain(&p, &[0.3], 0.25, -0.05, 0.2, 0.15), -0.05);
         // A position: at rest when it did not change; the rest is where it stands.
         let c = Coulomb { on_change: true };

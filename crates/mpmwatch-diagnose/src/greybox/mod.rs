@@ -115,9 +115,10 @@ pub trait Element: Sync {
     }
     /// Forces fed back from the simulated output (`x(t−1)`, `x(t−2)`).
     fn feedback(&self, _p: &[f64], _x1: f64, _x2: f64, _out: &mut Vec<f64>) {}
-    /// The next output once the fed-back forces have acted: `free` without them, `forced`
-    /// with them weighted by their fitted coefficients `gamma`, `x1` and `x2` the two before.
-    /// By default `forced`; friction uses it to stop a motion rather than reverse it.
+    /// The next value of the linear part's output `x` (before the output map) once the
+    /// fed-back forces have acted: `free` without them, `forced` with them weighted by their
+    /// fitted coefficients `gamma`, `x1` and `x2` the two values before. By default `forced`;
+    /// friction uses it to stick at rest (`friction::Coulomb`).
     fn constrain(&self, _p: &[f64], _gamma: &[f64], _free: f64, forced: f64, _x1: f64, _x2: f64) -> f64 {
         forced
     }
