@@ -7,7 +7,10 @@ use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
 /// A port free on 127.0.0.1 now (the OS picks it; tests on this machine run in parallel with
-/// other test binaries, so fixed ports could collide).
+/// other test binaries, so fixed ports could collide). Free now, not later: another test can
+/// take it before the caller binds it, so an HTTP server binds port 0 instead and reports its
+/// port (`Service::http_addr`); this is for what must be known before the start (a zenoh
+/// listener the publisher connects to).
 pub fn free_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())

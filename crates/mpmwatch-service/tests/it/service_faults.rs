@@ -1,7 +1,7 @@
 //! Faults of the online monitor, each on a real service with real zenoh sessions on 127.0.0.1
 //! and the real HTTP API: a router restart, a publisher that leaves and returns, jumps of the
-//! source clock, and a store that fills up. Ports come from the OS (`free_port`), so these tests
-//! run beside other test binaries.
+//! source clock, and a store that fills up. Ports come from the OS (HTTP binds port 0, zenoh
+//! listens on a `free_port`), so these tests run beside other test binaries.
 
 use crate::service_support;
 
@@ -45,11 +45,12 @@ async fn publish_until(
 
 #[tokio::test(flavor = "multi_thread")]
 async fn the_service_reconnects_after_a_router_restart() {
-    let (rport, http) = (free_port(), free_port());
+    let rport = free_port();
     let ep = format!("tcp/127.0.0.1:{rport}");
     let r = router(&ep).await;
     let service =
-        Service::start(config(&client_config(rport, http, None, "every = 3600"))).await.expect("service");
+        Service::start(config(&client_config(rport, 0, None, "every = 3600"))).await.expect("service");
+    let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let p = client(&ep).await;
     wait_routed(&p, http).await;
     let mut toy = Toy::new(1);
@@ -80,9 +81,10 @@ async fn the_service_reconnects_after_a_router_restart() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
-    let (zport, http) = (free_port(), free_port());
+    let zport = free_port();
     let service =
-        Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.expect("service");
+        Service::start(config(&config_text(zport, 0, None, "every = 3600"))).await.expect("service");
+    let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let p = publisher(zport).await;
     wait_routed(&p, http).await;
     let mut toy = Toy::new(2);
@@ -122,9 +124,10 @@ async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn jumps_of_the_source_clock_are_counted_and_survived() {
-    let (zport, http) = (free_port(), free_port());
+    let zport = free_port();
     let service =
-        Service::start(config(&config_text(zport, http, None, "every = 3600"))).await.expect("service");
+        Service::start(config(&config_text(zport, 0, None, "every = 3600"))).await.expect("service");
+    let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let p = publisher(zport).await;
     wait_routed(&p, http).await;
     let mut toy = Toy::new(3);
@@ -181,15 +184,16 @@ async fn jumps_of_the_source_clock_are_counted_and_survived() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_full_store_degrades_health_and_analysis_goes_on() {
-    let (zport, http) = (free_port(), free_port());
+    let zport = free_port();
     let dir = std::env::temp_dir().join(format!("mpmwatch-full-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
     // A cap of 16 KiB: the empty schema nearly fills it, as a full disk would.
-    let text = config_text(zport, http, Some(&store), "every = 3600")
+    let text = config_text(zport, 0, Some(&store), "every = 3600")
         .replace("flush_interval_ms = 100", "flush_interval_ms = 100\nmax_bytes = 16384");
     let service = Service::start(config(&text)).await.expect("service");
+    let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let (_, h) = get_json(http, "/healthz").await;
     assert_eq!(h["status"], "ok", "{h}");
     assert_eq!(h["store"]["ok"], true, "{h}");

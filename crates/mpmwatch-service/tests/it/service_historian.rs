@@ -26,10 +26,11 @@ async fn put(s: &zenoh::Session, key: &str, payload: String) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn per_tag_batches_with_a_back_fill_lose_nothing_and_raise_the_right_alarm() {
-    let (zport, http) = (free_port(), free_port());
-    let text = historian_config(zport, http);
+    let zport = free_port();
+    let text = historian_config(zport, 0);
     assert!(text.contains("window = 2048") && !text.contains("tolerance") && !text.contains("grace"));
     let service = Service::start(config(&text)).await.unwrap();
+    let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let s = publisher(zport).await;
     let alarms = s.declare_subscriber("mpm/c1/alarm").await.unwrap();
     wait_routed(&s, http).await;

@@ -34,11 +34,11 @@ fn with_http(text: &str, http: &str) -> String {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn without_a_token_the_api_is_read_only() {
-    let (z, h) = (free_port(), free_port());
-    let cfg = config(&config_text(z, h, None, "every = 3600"));
+    let z = free_port();
+    let cfg = config(&config_text(z, 0, None, "every = 3600"));
     assert!(cfg.http.token.is_none() && cfg.http.token_env.is_none());
     // The default bind is loopback.
-    assert_eq!(Config::parse(&config_text(z, h, None, ""), "t").unwrap().http.bind, format!("127.0.0.1:{h}"));
+    assert_eq!(Config::parse(&config_text(z, 0, None, ""), "t").unwrap().http.bind, "127.0.0.1:0");
     let default: Config = "[[controller]]\nid = \"c\"\nperiod = 1.0\nmv = [\"u\"]\ndither = [\"d\"]\ncv = [\"y\"]\npred = [\"p\"]\n"
         .parse()
         .unwrap();
@@ -46,6 +46,7 @@ async fn without_a_token_the_api_is_read_only() {
 
     // MPMWATCH_TOKEN is not set in this test binary (the other test sets its token in the file).
     let service = Service::start(cfg).await.expect("service");
+    let h = service.http_addr.port(); // bound on port 0: no other test can hold it
     let a = request(h, "GET", "/healthz", &[], b"").await;
     assert_eq!(a.status, 200);
     let a = request(h, "POST", "/api/v1/controllers/c1/run", &[], b"").await;
@@ -71,9 +72,9 @@ async fn non_get_needs_the_token_bodies_and_rates_are_limited_and_logs_keep_it_s
         .try_init()
         .expect("this binary's only subscriber");
 
-    let (z, h) = (free_port(), free_port());
+    let z = free_port();
     let text = with_http(
-        &config_text(z, h, None, "every = 3600"),
+        &config_text(z, 0, None, "every = 3600"),
         &format!(
             "token = \"{TOKEN}\"\nmax_body_bytes = 1024\nrate_limit_per_s = 1000\nrate_limit_burst = 1000"
         ),
@@ -84,6 +85,7 @@ async fn non_get_needs_the_token_bodies_and_rates_are_limited_and_logs_keep_it_s
     assert!(debug.contains("redacted"));
     tracing::info!(config = ?cfg, "the config as a tracing field");
     let service = Service::start(cfg).await.expect("service");
+    let h = service.http_addr.port(); // bound on port 0: no other test can hold it
 
     // GET stays open; non-GET needs the right bearer token.
     assert_eq!(request(h, "GET", "/api/v1/controllers", &[], b"").await.status, 200);
@@ -120,12 +122,13 @@ async fn non_get_needs_the_token_bodies_and_rates_are_limited_and_logs_keep_it_s
     service.stop().await;
 
     // Rate limit: a bucket of 3 at 1 per second; the fourth request at once gets 429.
-    let (z, h) = (free_port(), free_port());
+    let z = free_port();
     let text = with_http(
-        &config_text(z, h, None, "every = 3600"),
+        &config_text(z, 0, None, "every = 3600"),
         &format!("token = \"{TOKEN}\"\nrate_limit_per_s = 1\nrate_limit_burst = 3"),
     );
     let service = Service::start(config(&text)).await.expect("service");
+    let h = service.http_addr.port(); // bound on port 0: no other test can hold it
     for _ in 0..3 {
         assert_eq!(request(h, "GET", "/healthz", &[], b"").await.status, 200);
     }

@@ -90,16 +90,17 @@ async fn the_service_receives_over_mtls_and_others_are_refused() {
     let rogue = ca(&rogue_dir, "ca.pem", "another CA");
     leaf(&rogue_dir, &rogue, "historian-gw", &["historian-gw"]);
     // The router's files are named router.pem / router-key.pem in the example.
-    let (port, http) = (free_port(), free_port());
+    let port = free_port();
     let router_cfg = example("zenoh-router-tls.json5", &dir, port, "router.json5");
     let router = open_file(&router_cfg).await.expect("TLS router");
 
     let monitor_cfg = example("zenoh-mpmwatch-tls.json5", &dir, port, "mpmwatch.json5");
-    let text = config_text(0, http, None, "every = 3600").replace("mode = \"peer\"\n", "").replace(
+    let text = config_text(0, 0, None, "every = 3600").replace("mode = \"peer\"\n", "").replace(
         "listen = [\"tcp/127.0.0.1:0\"]",
         &format!("config_file = {:?}", monitor_cfg.display().to_string()),
     );
     let service = Service::start(config(&text)).await.expect("service over TLS");
+    let http = service.http_addr.port(); // bound on port 0: no other test can hold it
 
     // The gateway's certificate: data flows to the service over TLS.
     let publisher_cfg = example("zenoh-publisher-tls.json5", &dir, port, "publisher.json5");

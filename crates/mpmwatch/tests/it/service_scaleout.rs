@@ -40,7 +40,7 @@ async fn client(router: u16) -> zenoh::Session {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn two_instances_behind_one_router_each_see_only_their_half() {
-    let (port, http_a, http_b) = (free_port(), free_port(), free_port());
+    let port = free_port();
     let all = LoadgenOptions {
         controllers: CONTROLLERS,
         batch: 10,
@@ -56,8 +56,10 @@ async fn two_instances_behind_one_router_each_see_only_their_half() {
     assert_eq!([ids_a.clone(), ids_b.clone()].concat(), ids(&all));
 
     let router = router(port).await;
-    let a = Service::start(config(&instance(port, http_a, &half_a))).await.unwrap();
-    let b = Service::start(config(&instance(port, http_b, &half_b))).await.unwrap();
+    let a = Service::start(config(&instance(port, 0, &half_a))).await.unwrap();
+    let b = Service::start(config(&instance(port, 0, &half_b))).await.unwrap();
+    // Bound on port 0: no other test can hold them.
+    let (http_a, http_b) = (a.http_addr.port(), b.http_addr.port());
     let publisher = client(port).await;
     // loadgen waits until every key (all four controllers) has a subscriber through the router.
     let sent = loadgen::run(&publisher, &all).await.expect("loadgen");
