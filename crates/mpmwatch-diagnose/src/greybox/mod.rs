@@ -329,9 +329,9 @@ impl Model<'_> {
 
     /// The largest pole modulus of the corrected model, to 1e-9: the linear part's (`α`) and
     /// the element's own ([`Element::poles`]), +∞ when one of those is not finite. Feedback
-    /// forces (`γ`) are not linearised into it. The linear
-    /// part's is the radius below which the Schur–Cohn test finds the denominator rescaled by it
-    /// stable, by bisection (the poles of `A(ρ·q⁻¹)` are those of `A` divided by `ρ`).
+    /// forces (`γ`) are not linearised into it. The linear part's is the radius below which
+    /// the Schur–Cohn test finds the denominator rescaled by it stable, by bisection (the
+    /// poles of `A(ρ·q⁻¹)` are those of `A` divided by `ρ`).
     pub fn slowest_pole(&self, f: &Fitted) -> f64 {
         let alpha = &f.theta[..self.orders.na.min(f.theta.len())];
         let own = self.element.poles(&f.p);
