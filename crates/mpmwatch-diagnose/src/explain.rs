@@ -50,7 +50,8 @@ pub(crate) fn explain(
         // Without dithers the MI of an input against the residual of a least-squares nominal
         // misses much of what a fit shows (the residual is orthogonal to the regressors), so
         // on the grey-box path an output nothing flagged is still explained, every input a
-        // candidate; only a finding that wins out of sample is kept (below).
+        // candidate; only a finding that wins out of sample is kept (below), or a correction
+        // that won but was withheld, which says the model is wrong.
         let quiet = flagged.is_empty() && !limits;
         if quiet && !(greybox_path && open_loop) {
             continue;
@@ -66,7 +67,7 @@ pub(crate) fn explain(
         let s0 = input.simulated[j].values;
         let (mut finding, corrected_j, curve) = if greybox_path {
             let e = by_structures(input, opts, plan, cv, j, &flagged, open_loop);
-            if quiet && e.finding.physics == Physics::Unexplained {
+            if quiet && e.finding.physics == Physics::Unexplained && !e.withheld {
                 continue;
             }
             (e.finding, e.corrected, e.curve)

@@ -36,6 +36,11 @@ impl Element for ClipSensor {
     fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
         Some(self.output(p, v))
     }
+    /// Where the simulated reading is held at a limit.
+    fn acting(&self, p: &[f64], _u: &[&[f64]], _i: usize, yhat: &[f64]) -> Option<Vec<bool>> {
+        let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
+        Some(yhat.iter().map(|&v| v <= lo || v >= hi).collect())
+    }
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         (

@@ -39,6 +39,10 @@ impl Element for DeadZone {
     fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
         Some(map(v, p[0], p[1]))
     }
+    /// Where the input is inside the zone.
+    fn acting(&self, p: &[f64], u: &[&[f64]], i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
+        Some(u[i].iter().map(|&v| (v - p[0]).abs() < p[1].abs()).collect())
+    }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         (
             format!(

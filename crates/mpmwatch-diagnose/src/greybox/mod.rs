@@ -122,6 +122,15 @@ pub trait Element: Sync {
     fn constrain(&self, _p: &[f64], _gamma: &[f64], _free: f64, forced: f64, _x1: f64, _x2: f64) -> f64 {
         forced
     }
+    /// Per sample, whether the element's nonlinearity acts there under `p` (a limit binds, an
+    /// input sits inside a dead zone), `u` the inputs, `i` the input it acts on and `yhat` the
+    /// model's simulated output. An element with a kink can place it beyond the record, where it
+    /// is its linear part under a nonlinear name; this is how [`explain`] tells. `None` (the
+    /// default): a smooth map, a force or a play, which departs from a line wherever its signal
+    /// moves, tested only by its margin over the linear re-fit.
+    fn acting(&self, _p: &[f64], _u: &[&[f64]], _i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
+        None
+    }
     /// How many forces [`Element::feedback`] returns.
     fn feedbacks(&self) -> usize {
         0
@@ -351,6 +360,20 @@ impl Model<'_> {
             if inside(mid) { hi = mid } else { lo = mid }
         }
         own.iter().fold(hi, |m, r| m.max(r.abs()))
+    }
+
+    /// The share of `rows` on which the fitted element's nonlinearity acts
+    /// ([`Element::acting`]), `sim` the model's simulation; `None` for an element that does not
+    /// say, or no rows.
+    pub fn acting_share(&self, f: &Fitted, u: &[&[f64]], sim: &[f64], rows: &[usize]) -> Option<f64> {
+        let acts = self.element.acting(&f.p, u, self.input, sim)?;
+        if rows.is_empty() {
+            return None;
+        }
+        Some(
+            rows.iter().filter(|&&t| acts.get(t).copied().unwrap_or(false)).count() as f64
+                / rows.len() as f64,
+        )
     }
 
     /// Coefficients in `theta`.
@@ -584,6 +607,38 @@ mod tests {
             let got = m.slowest_pole(&f);
             assert!(got == want || (got - want).abs() < 1e-9, "store {store}: {got} against {want}");
         }
+    }
+
+    /// Where each element with a kink acts, counted on a ramp of 100 samples from 0 to 0.99
+    /// (limits between its steps, so no sample sits on one): limits at 0.205 and 0.905 bind on
+    /// 0 to 0.20 and 0.91 to 0.99 (21 + 9 samples), 21 of them among the first 50; a store
+    /// without memory is the input itself, so it binds where the actuator limit does; a dead
+    /// zone of half-width 0.105 about 0.5 holds 0.40 to 0.60 (21); a reading clipped at 0.905 is
+    /// held from 0.91 up (9). Limits beyond the ramp, or a zone of no width, act nowhere. A
+    /// smooth map does not answer.
+    #[test]
+    fn an_element_with_a_kink_says_where_it_acts() {
+        let u: Vec<f64> = (0..100).map(|t| t as f64 / 100.0).collect();
+        let all: Vec<usize> = (0..100).collect();
+        let share = |el: &dyn Element, p: Vec<f64>, rows: &[usize]| {
+            let m = Model { element: el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+            let f = Fitted { p, theta: vec![0.0, 1.0, 0.0], noise: Vec::new() };
+            m.acting_share(&f, &[&u], &u, rows)
+        };
+        let sat = &saturation::InputSaturation;
+        let store = &storage_limit::StorageLimit;
+        let (dz, clip) = (&dead_zone::DeadZone, &clip_sensor::ClipSensor);
+        assert_eq!(share(sat, vec![0.905, 0.205], &all), Some(0.3));
+        assert_eq!(share(sat, vec![-1.0, 2.0], &all), Some(0.0));
+        assert_eq!(share(sat, vec![0.205, 0.905], &all[..50]), Some(0.42));
+        assert_eq!(share(store, vec![0.0, 0.205, 0.905], &all), Some(0.3));
+        assert_eq!(share(store, vec![0.95, -1.0, 2.0], &all), Some(0.0));
+        assert_eq!(share(dz, vec![0.5, -0.105], &all), Some(0.21));
+        assert_eq!(share(dz, vec![0.5, 0.0], &all), Some(0.0));
+        assert_eq!(share(clip, vec![-1.0, 0.905], &all), Some(0.09));
+        assert_eq!(share(clip, vec![-1.0, 2.0], &all), Some(0.0));
+        assert_eq!(share(sat, vec![0.205, 0.905], &[]), None);
+        assert_eq!(share(&polynomial::Polynomial { degree: 2 }, vec![0.0, 1.0, 0.0, 1.0], &all), None);
     }
 
     /// A noise-free Hammerstein plant, a dead zone of half-width 0.3 before

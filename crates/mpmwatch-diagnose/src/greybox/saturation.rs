@@ -36,6 +36,11 @@ impl Element for InputSaturation {
     fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
         Some(v.clamp(p[0].min(p[1]), p[0].max(p[1])))
     }
+    /// Where the input is beyond a limit.
+    fn acting(&self, p: &[f64], u: &[&[f64]], i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
+        let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
+        Some(u[i].iter().map(|&v| v < lo || v > hi).collect())
+    }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
         let (lo, hi) = (p[0].min(p[1]), p[0].max(p[1]));
         (

@@ -62,6 +62,11 @@ impl Element for StorageLimit {
         let a = if (0.0..1.0).contains(&p[0]) { p[0] } else { f64::NAN };
         map_input(u, i, |x| store(x, a, lo, hi))
     }
+    /// Where the store's level is held at a limit (the clamp returns the limit itself).
+    fn acting(&self, p: &[f64], u: &[&[f64]], i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
+        let (lo, hi) = (p[1].min(p[2]), p[1].max(p[2]));
+        Some(store(u[i], p[0], lo, hi).iter().map(|&s| s == lo || s == hi).collect())
+    }
     /// The store's level for an input held at `v`, once it has settled: the cap itself (the
     /// store has unit gain). A swept loop would show the memory too, but its shape would depend
     /// on how fast the figure's sweep runs against the fitted time constant, which the
