@@ -226,7 +226,7 @@ pub fn explain(
     let withheld = slow.is_some() || idle.is_some();
     let summary = match (slow, idle, top, &linear) {
         (None, Some((physics, share, mean, worst)), ..) => format!(
-            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its nonlinearity acts on {:.1} % of the training rows, under the {} % that would show it: the gain is its linear part's, and no linear re-fit passes on its own, so it is not reported",
+            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %): its gain is its linear part's, and no linear re-fit passes on its own, so it is not reported",
             names.output,
             physics.name(),
             100.0 * share,
@@ -532,13 +532,17 @@ mod tests {
         let names = Names { inputs: vec!["u"], output: "y" };
         let explained = |y: &[f64]| {
             let d = Data { u: vec![&u], y, train: train.clone(), nominal: Some(&s), noise_order: 0 };
-            explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, &names).finding
+            explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, &names)
         };
 
         let fast = explained(&first_order(0.95));
+        assert!(!fast.withheld);
+        let fast = fast.finding;
         assert_eq!(fast.physics, Physics::TimeConstant, "{}", fast.summary);
 
         let slow = explained(&first_order(0.998));
+        assert!(slow.withheld, "a correction that passed the gate is withheld, not absent");
+        let slow = slow.finding;
         assert_eq!(slow.physics, Physics::Unexplained, "{}", slow.summary);
         // The time constant stated is the re-fit's: noise-free, its pole is the plant's to the
         // optimiser's tolerance, but near 1 a millionth of pole is a quarter sample of time
