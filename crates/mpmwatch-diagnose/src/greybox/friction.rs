@@ -78,7 +78,31 @@ impl Element for Coulomb {
 
 #[cfg(test)]
 mod tests {
+    use super::super::{Fitted, Model, Orders, fit};
     use super::*;
+
+    /// A noise-free friction-loaded velocity, `x(t) = 0.8 x(t−1) + 0.5 u(t−1) − 0.1 sign(x(t−1))`
+    /// with the sticking rule, on a staircase of 41 levels in [−1, 1]: a level within ±0.2
+    /// cannot start the body from rest, and the record sticks on a tenth of its rows or more.
+    /// The record is the structure's own simulation at the truth, where the simulation error is
+    /// zero, so the fit from the element's start must return to the truth; 1e-3 leaves room for
+    /// the forward-difference Jacobian, as in the other elements' recovery tests.
+    #[test]
+    fn a_noise_free_sticking_friction_is_recovered() {
+        let u: Vec<f64> = (0..1500).map(|t| ((t / 23 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
+        let c = Coulomb { on_change: false };
+        let m = Model { element: &c, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+        let truth = Fitted { p: vec![0.0], theta: vec![0.8, 0.5, -0.1, 0.0], noise: Vec::new() };
+        let y = m.simulate(&truth, &[&u], &vec![0.0; u.len()]).unwrap();
+        let stuck = (1..u.len()).filter(|&t| y[t] == 0.0 && y[t - 1] == 0.0 && u[t - 1] != 0.0).count();
+        assert!(stuck > 150, "the body must stick: {stuck} rows");
+        let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal: None, noise_order: 0 };
+        let rows: Vec<usize> = (10..1500).collect();
+        let f = fit(&m, &d, &rows).unwrap();
+        let want = [0.8, 0.5, -0.1];
+        assert!(f.theta.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-3), "{f:?}");
+        assert!(f.p[0].abs() < 1e-3 && f.theta[3].abs() < 1e-3, "{f:?}");
+    }
 
     /// The sticking rule on a velocity at rest at 0.1, friction γ = −0.3 per sample: a drive
     /// of 0.2 from rest stays at rest, one of 0.5 moves by what beats the friction (0.2); a
