@@ -646,6 +646,19 @@ mod tests {
         assert!((0.1..0.4).contains(&r2), "R² {r2}");
     }
 
+    /// `n` samples of an AR(1) series of pole 0.9 with unit Gaussian innovations, from rest.
+    fn ar1(seed: u64, n: usize) -> Vec<f64> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut x = 0.0;
+        (0..n)
+            .map(|_| {
+                let w: f64 = StandardNormal.sample(&mut rng);
+                x = 0.9 * x + w;
+                x
+            })
+            .collect()
+    }
+
     /// An AR(1) series with unit innovations: the one-step prediction error of a fitted AR model
     /// is the innovation, so the validation SSE per sample is 1 (closed form). With 10 000
     /// validation samples the mean of the squared innovations has a relative standard deviation
@@ -653,15 +666,7 @@ mod tests {
     /// deviations.
     #[test]
     fn prediction_error_of_an_ar1_series_is_its_innovation_variance() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        let mut x = 0.0;
-        let e: Vec<f64> = (0..20_000)
-            .map(|_| {
-                let w: f64 = StandardNormal.sample(&mut rng);
-                x = 0.9 * x + w;
-                x
-            })
-            .collect();
+        let e = ar1(11, 20_000);
         let fit: Vec<usize> = (0..10_000).collect();
         let (sse, used) = prediction_sse(
             &e,
@@ -685,15 +690,7 @@ mod tests {
     /// 3.5 standard deviations, 10 000 samples summed).
     #[test]
     fn the_noise_model_is_not_fitted_across_the_validation_block() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
-        let mut x = 0.0;
-        let mut e: Vec<f64> = (0..30_000)
-            .map(|_| {
-                let w: f64 = StandardNormal.sample(&mut rng);
-                x = 0.9 * x + w;
-                x
-            })
-            .collect();
+        let mut e = ar1(12, 30_000);
         for (k, v) in e[10_000..10_010].iter_mut().enumerate() {
             *v = if k % 2 == 0 { 1e6 } else { -1e6 };
         }
@@ -743,15 +740,7 @@ mod tests {
     /// stop 41). `rank` scores each hypothesis under both models.
     #[test]
     fn the_integrated_noise_model_wins_only_for_a_wandering_disturbance() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(14);
-        let mut x = 0.0;
-        let ar: Vec<f64> = (0..30_000)
-            .map(|_| {
-                let w: f64 = StandardNormal.sample(&mut rng);
-                x = 0.9 * x + w;
-                x
-            })
-            .collect();
+        let ar = ar1(14, 30_000);
         let fit: Vec<usize> = (0..10_000).chain(20_000..30_000).collect();
         let per_sample = |e: &[f64], integrated: bool| {
             let noise = NoiseModel { order: PREDICTION_ORDER, integrated };
