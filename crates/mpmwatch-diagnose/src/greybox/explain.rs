@@ -59,8 +59,8 @@ const FIRST_MOVE: f64 = 0.01;
 /// ([`Element::acting`]): a limit beyond the record binds on none, and the element is then its
 /// linear part under a nonlinear name (an extra pole, for a store); one that binds on a handful
 /// is placed by those few noisy samples. One row in a hundred is about twenty rows of a
-/// record of a few thousand, seven in each validation block of three, set before measuring
-/// (docs/diagnose.md, stop 44, has the shares the named findings reach).
+/// training part of 2100, seven a validation block on average (docs/diagnose.md, stop 44, has
+/// the shares the named findings reach).
 pub const MIN_ACTING: f64 = 0.01;
 
 /// Points of cross-validated FIT within which the element with fewer parameters is preferred.
@@ -224,19 +224,32 @@ pub fn explain(
     }
     let top = scored.iter().max_by(|a, b| rank(&a.0).total_cmp(&rank(&b.0)));
     let withheld = slow.is_some() || idle.is_some();
+    let tau_text = |tau: f64| {
+        if tau.is_finite() { num(tau) } else { "infinite (an integrator or unstable)".to_string() }
+    };
     let summary = match (slow, idle, top, &linear) {
-        (None, Some((physics, share, mean, worst)), ..) => format!(
-            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %): its gain is its linear part's, and no linear re-fit passes on its own, so it is not reported",
+        // Only the element chosen can be idle, and only once it has settled: a slow correction
+        // beside it is the linear re-fit tried in its place.
+        (slow, Some((physics, share, mean, worst)), ..) => format!(
+            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %), so its gain is its linear part's and it is not reported; {}",
             names.output,
             physics.name(),
             100.0 * share,
             100.0 * MIN_ACTING,
+            match slow {
+                Some((_, tau, ..)) => format!(
+                    "the re-fitted linear model tried in its place has a slowest time constant of {} samples, longer than the {} samples of a validation block",
+                    tau_text(tau),
+                    block
+                ),
+                None => "no re-fitted linear model is reported in its place".to_string(),
+            },
         ),
         (Some((physics, tau, mean, worst)), ..) => format!(
             "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next, so it is not reported",
             names.output,
             if physics == Physics::Unexplained { "a re-fitted linear model" } else { physics.name() },
-            if tau.is_finite() { num(tau) } else { "infinite (an integrator or unstable)".to_string() },
+            tau_text(tau),
             block,
         ),
         (None, None, Some((v, k, ..)), Some((_, lv))) => format!(

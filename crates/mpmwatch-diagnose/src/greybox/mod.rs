@@ -124,10 +124,12 @@ pub trait Element: Sync {
     }
     /// Per sample, whether the element's nonlinearity acts there under `p` (a limit binds, an
     /// input sits inside a dead zone), `u` the inputs, `i` the input it acts on and `yhat` the
-    /// model's simulated output. An element with a kink can place it beyond the record, where it
-    /// is its linear part under a nonlinear name; this is how [`explain`] tells. `None` (the
-    /// default): a smooth map, a force or a play, which departs from a line wherever its signal
-    /// moves, tested only by its margin over the linear re-fit.
+    /// model's simulated output, `p` finite (as every fitted model's is). An element with a kink
+    /// can place it beyond the record, where it is its linear part under a nonlinear name; this
+    /// is how [`explain`] tells. `None` (the default): a smooth map, a force or a play, which
+    /// departs from a line wherever its signal moves, tested only by its margin over the linear
+    /// re-fit; and the |x| sensor, whose kink is at `x = 0` where `yhat`, a magnitude, does not
+    /// show which side `x` is on.
     fn acting(&self, _p: &[f64], _u: &[&[f64]], _i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
         None
     }
@@ -370,10 +372,7 @@ impl Model<'_> {
         if rows.is_empty() {
             return None;
         }
-        Some(
-            rows.iter().filter(|&&t| acts.get(t).copied().unwrap_or(false)).count() as f64
-                / rows.len() as f64,
-        )
+        Some(rows.iter().filter(|&&t| acts[t]).count() as f64 / rows.len() as f64)
     }
 
     /// Coefficients in `theta`.
@@ -614,16 +613,18 @@ mod tests {
     /// 0 to 0.20 and 0.91 to 0.99 (21 + 9 samples), 21 of them among the first 50; a store
     /// without memory is the input itself, so it binds where the actuator limit does; a dead
     /// zone of half-width 0.105 about 0.5 holds 0.40 to 0.60 (21); a reading clipped at 0.905 is
-    /// held from 0.91 up (9). Limits beyond the ramp, or a zone of no width, act nowhere. A
-    /// smooth map does not answer.
+    /// held at it from 0.91 up (9). Limits beyond the ramp, or a zone of no width, act nowhere.
+    /// A smooth map does not answer.
     #[test]
     fn an_element_with_a_kink_says_where_it_acts() {
         let u: Vec<f64> = (0..100).map(|t| t as f64 / 100.0).collect();
         let all: Vec<usize> = (0..100).collect();
+        // The simulated reading as a clip returns it, the limit itself where it clips.
+        let read: Vec<f64> = u.iter().map(|v| v.min(0.905)).collect();
         let share = |el: &dyn Element, p: Vec<f64>, rows: &[usize]| {
             let m = Model { element: el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
             let f = Fitted { p, theta: vec![0.0, 1.0, 0.0], noise: Vec::new() };
-            m.acting_share(&f, &[&u], &u, rows)
+            m.acting_share(&f, &[&u], &read, rows)
         };
         let sat = &saturation::InputSaturation;
         let store = &storage_limit::StorageLimit;

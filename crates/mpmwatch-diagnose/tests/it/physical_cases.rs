@@ -64,12 +64,11 @@ fn a_linear_plant_gets_no_nonlinear_physics() {
     }
 }
 
-/// The tank of seed 5063, from a report set of stop 43, where it was named `saturation` and its
-/// held-out FIT fell (3.8 → −16.3 %): its best correction is a store whose fitted limits lie
-/// beyond the range its level visits, so they bind on no row and the store is a linear extra
-/// pole. A named element must act on 1 % of the training rows (`greybox::explain`), so the
-/// correction is withheld, and the finding says why. Kept as the regression test of that rule;
-/// the rule's scores are the study's, on other seeds (docs/diagnose.md, stop 44).
+/// The tank of seed 5063 (a report seed, so not evidence of the rule's rate): its best
+/// correction is a store whose fitted limits lie beyond the range its level visits, a linear
+/// extra pole that, named `saturation`, lowered the held-out FIT (3.8 → −16.3 %). A named
+/// element must act on 1 % of the training rows (`greybox::explain`), so it is withheld, and
+/// the finding says why.
 #[test]
 fn a_store_whose_limits_never_bind_is_withheld() {
     let r = run(PhysicalCase::TankOverflow, 3000, 5063).unwrap();
