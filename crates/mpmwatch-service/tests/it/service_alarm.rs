@@ -1,15 +1,12 @@
 //! Published samples to an alarm on the right channel over real zenoh on loopback, and its
 //! clear once the model is fixed; the events arrive on `mpm/c1/alarm`.
 
-use crate::fault_support::free_port;
 use crate::service_support::*;
-use mpmwatch_service::Service;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn wrong_model_raises_the_right_alarm_and_a_fixed_model_clears_it() {
-    let zport = free_port();
-    let cfg = config(&config_text(zport, 0, None, "every = 0.3\nraise_after = 2\nclear_after = 2"));
-    let service = Service::start(cfg).await.unwrap();
+    let (service, zport) =
+        start_service(|z| config_text(z, 0, None, "every = 0.3\nraise_after = 2\nclear_after = 2")).await;
     let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let pubs = publisher(zport).await;
     let alarms = pubs.declare_subscriber("mpm/c1/alarm").await.unwrap();

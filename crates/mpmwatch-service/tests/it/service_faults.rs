@@ -81,9 +81,7 @@ async fn the_service_reconnects_after_a_router_restart() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
-    let zport = free_port();
-    let service =
-        Service::start(config(&config_text(zport, 0, None, "every = 3600"))).await.expect("service");
+    let (service, zport) = start_service(|z| config_text(z, 0, None, "every = 3600")).await;
     let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let p = publisher(zport).await;
     wait_routed(&p, http).await;
@@ -124,9 +122,7 @@ async fn a_publisher_that_leaves_and_returns_is_a_counted_gap() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn jumps_of_the_source_clock_are_counted_and_survived() {
-    let zport = free_port();
-    let service =
-        Service::start(config(&config_text(zport, 0, None, "every = 3600"))).await.expect("service");
+    let (service, zport) = start_service(|z| config_text(z, 0, None, "every = 3600")).await;
     let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let p = publisher(zport).await;
     wait_routed(&p, http).await;
@@ -184,15 +180,16 @@ async fn jumps_of_the_source_clock_are_counted_and_survived() {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn a_full_store_degrades_health_and_analysis_goes_on() {
-    let zport = free_port();
     let dir = std::env::temp_dir().join(format!("mpmwatch-full-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let store = dir.join("store.sqlite");
     // A cap of 16 KiB: the empty schema nearly fills it, as a full disk would.
-    let text = config_text(zport, 0, Some(&store), "every = 3600")
-        .replace("flush_interval_ms = 100", "flush_interval_ms = 100\nmax_bytes = 16384");
-    let service = Service::start(config(&text)).await.expect("service");
+    let (service, zport) = start_service(|z| {
+        config_text(z, 0, Some(&store), "every = 3600")
+            .replace("flush_interval_ms = 100", "flush_interval_ms = 100\nmax_bytes = 16384")
+    })
+    .await;
     let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let (_, h) = get_json(http, "/healthz").await;
     assert_eq!(h["status"], "ok", "{h}");
@@ -238,4 +235,20 @@ async fn a_full_store_degrades_health_and_analysis_goes_on() {
     let _ = p.close().await;
     service.stop().await;
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The start helper's retry: the first zenoh port it is handed is held by another listener, so
+/// that start fails; the next port is free, and the service started there serves.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_start_on_a_taken_zenoh_port_is_tried_again_on_a_fresh_one() {
+    let held = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let taken = held.local_addr().unwrap().port();
+    let mut handed = vec![taken];
+    let ports = || handed.pop().unwrap_or_else(free_port);
+    let (service, zport) = start_service_on(ports, |z| config_text(z, 0, None, "every = 3600")).await;
+    assert_ne!(zport, taken);
+    let (code, h) = get_json(service.http_addr.port(), "/healthz").await;
+    assert_eq!(code, 200, "{h}");
+    service.stop().await;
+    drop(held);
 }

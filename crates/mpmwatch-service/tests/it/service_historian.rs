@@ -4,9 +4,7 @@
 //! back-filled), and a few bad messages. Every sample is ingested or counted by reason, the
 //! window ends whole, and the alarm rises on the planted channel only.
 
-use crate::fault_support::free_port;
 use crate::service_support::*;
-use mpmwatch_service::Service;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -26,10 +24,9 @@ async fn put(s: &zenoh::Session, key: &str, payload: String) {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn per_tag_batches_with_a_back_fill_lose_nothing_and_raise_the_right_alarm() {
-    let zport = free_port();
-    let text = historian_config(zport, 0);
+    let text = historian_config(0, 0);
     assert!(text.contains("window = 2048") && !text.contains("tolerance") && !text.contains("grace"));
-    let service = Service::start(config(&text)).await.unwrap();
+    let (service, zport) = start_service(|z| historian_config(z, 0)).await;
     let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let s = publisher(zport).await;
     let alarms = s.declare_subscriber("mpm/c1/alarm").await.unwrap();

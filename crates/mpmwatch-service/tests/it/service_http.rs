@@ -2,14 +2,12 @@
 //! server over loopback. Analyses are triggered directly (`scheduler::run_once`) so that the
 //! states before and after a run are deterministic.
 
-use crate::fault_support::free_port;
 use crate::service_support::*;
-use mpmwatch_service::{Service, run_once};
+use mpmwatch_service::run_once;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn http_api_bodies_and_error_codes() {
-    let zport = free_port();
-    let service = Service::start(config(&config_text(zport, 0, None, "every = 3600"))).await.unwrap();
+    let (service, zport) = start_service(|z| config_text(z, 0, None, "every = 3600")).await;
     // Bound on port 0: the OS picked a free loopback port, which the service reports.
     let http = service.http_addr.port();
     assert!(service.http_addr.ip().is_loopback() && http != 0, "{}", service.http_addr);

@@ -1,14 +1,11 @@
 //! Every kind of bad input over real zenoh is counted by reason and survived: the monitor keeps
 //! ingesting good samples afterwards.
 
-use crate::fault_support::free_port;
 use crate::service_support::*;
-use mpmwatch_service::Service;
 
 #[tokio::test(flavor = "multi_thread")]
 async fn bad_payloads_are_counted_by_reason_and_survived() {
-    let zport = free_port();
-    let service = Service::start(config(&config_text(zport, 0, None, "every = 3600"))).await.unwrap();
+    let (service, zport) = start_service(|z| config_text(z, 0, None, "every = 3600")).await;
     let http = service.http_addr.port(); // bound on port 0: no other test can hold it
     let s = publisher(zport).await;
     wait_routed(&s, http).await;

@@ -122,12 +122,13 @@ async fn non_get_needs_the_token_bodies_and_rates_are_limited_and_logs_keep_it_s
     service.stop().await;
 
     // Rate limit: a bucket of 3 at 1 per second; the fourth request at once gets 429.
-    let z = free_port();
-    let text = with_http(
-        &config_text(z, 0, None, "every = 3600"),
-        &format!("token = \"{TOKEN}\"\nrate_limit_per_s = 1\nrate_limit_burst = 3"),
-    );
-    let service = Service::start(config(&text)).await.expect("service");
+    let (service, _) = start_service(|z| {
+        with_http(
+            &config_text(z, 0, None, "every = 3600"),
+            &format!("token = \"{TOKEN}\"\nrate_limit_per_s = 1\nrate_limit_burst = 3"),
+        )
+    })
+    .await;
     let h = service.http_addr.port(); // bound on port 0: no other test can hold it
     for _ in 0..3 {
         assert_eq!(request(h, "GET", "/healthz", &[], b"").await.status, 200);

@@ -45,6 +45,31 @@ surrogates = 30
     )
 }
 
+/// A service started from the config `text(zenoh_port)`, its zenoh listener on a port
+/// [`free_port`](crate::fault_support::free_port) has just picked, and that port. Another
+/// process can take a picked port before the service binds it (the HTTP port has no such race:
+/// it is bound on port 0), so a start that fails is tried again on a fresh port, three times
+/// in all; the panic quotes the last error.
+pub async fn start_service(text: impl Fn(u16) -> String) -> (mpmwatch_service::Service, u16) {
+    start_service_on(crate::fault_support::free_port, text).await
+}
+
+/// [`start_service`] with the zenoh ports drawn from `ports`.
+pub async fn start_service_on(
+    mut ports: impl FnMut() -> u16,
+    text: impl Fn(u16) -> String,
+) -> (mpmwatch_service::Service, u16) {
+    let mut last = String::new();
+    for _ in 0..3 {
+        let zenoh_port = ports();
+        match mpmwatch_service::Service::start(config(&text(zenoh_port))).await {
+            Ok(service) => return (service, zenoh_port),
+            Err(e) => last = e.to_string(),
+        }
+    }
+    panic!("the service did not start on three fresh zenoh ports: {last}");
+}
+
 /// Parses a test config.
 pub fn config(text: &str) -> Config {
     Config::parse(text, "test").expect("test config")
