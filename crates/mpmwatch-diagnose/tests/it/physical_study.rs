@@ -55,13 +55,19 @@ fn is_right(case: PhysicalCase, physics: &str) -> bool {
     case.accepted().contains(&physics)
 }
 
+/// The studies' seed range from `SEEDS=a..b` (end exclusive; 1..4 by default) and record length
+/// from `N` (`default_n` by default).
+fn seeds_and_length(default_n: usize) -> (u64, u64, usize) {
+    let seeds = std::env::var("SEEDS").unwrap_or_else(|_| "1..4".into());
+    let (a, b) = seeds.split_once("..").expect("SEEDS=a..b");
+    let n = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(default_n);
+    (a.parse().expect("SEEDS=a..b"), b.parse().expect("SEEDS=a..b"), n)
+}
+
 #[test]
 #[ignore]
 fn study() {
-    let seeds = std::env::var("SEEDS").unwrap_or_else(|_| "1..4".into());
-    let (a, b) = seeds.split_once("..").expect("SEEDS=a..b");
-    let (a, b): (u64, u64) = (a.parse().unwrap(), b.parse().unwrap());
-    let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
+    let (a, b, n) = seeds_and_length(3000);
     let only = std::env::var("CASE").ok();
     let (mut right, mut total, mut worse) = (0, 0, 0);
     for case in PhysicalCase::ALL {
@@ -129,17 +135,14 @@ fn study() {
 /// itself (the noise-free plant output as the simulation), as `an_exact_model_gets_no_finding`
 /// does for one seed. Prints, per class, how many records got a named finding (a false alarm
 /// of the physics) and how many an `unexplained` one (which says the model misses something:
-/// a false alarm in words, since stop 44 also on an output nothing flagged when a withheld
-/// correction passed the gate). Ignored; `SEEDS=a..b N=2000 cargo test --release -p
+/// a false alarm in words, also on an output nothing flagged when a withheld correction passed
+/// the gate). Ignored; `SEEDS=a..b N=2000 cargo test --release -p
 /// mpmwatch-diagnose --test it physical_study::no_change_study -- --ignored --exact
 /// --nocapture`.
 #[test]
 #[ignore]
 fn no_change_study() {
-    let seeds = std::env::var("SEEDS").unwrap_or_else(|_| "1..4".into());
-    let (a, b) = seeds.split_once("..").expect("SEEDS=a..b");
-    let (a, b): (u64, u64) = (a.parse().unwrap(), b.parse().unwrap());
-    let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
+    let (a, b, n) = seeds_and_length(2000);
     let (mut named, mut unexplained, mut total) = (0, 0, 0);
     for case in PhysicalCase::ALL {
         let (mut case_named, mut case_unexplained) = (0, 0);
