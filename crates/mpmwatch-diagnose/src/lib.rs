@@ -65,7 +65,9 @@ pub use minimize::{minimize, minimize_from};
 pub use mpmwatch_core::detect::Method;
 pub use nominal::{NominalArx, identify as identify_nominal};
 pub use physical::{LEVEL_QUANTILES, PhysicalModel};
-pub use report::{ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried};
+pub use report::{
+    BeyondTraining, ChannelReport, DiagnosisReport, Finding, Holdout, Settings, StateReport, Tried,
+};
 pub use select::Scoring;
 
 use mpmwatch_core::detect::{MatrixResult, Signal};
@@ -134,7 +136,17 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
         mismatch: mismatch || findings.iter().any(|f| f.physics != Physics::Unexplained),
         channels,
         findings,
-        holdout: Holdout { start_index: n_train, fit_before_pct: before, fit_after_pct: after },
+        holdout: Holdout {
+            start_index: n_train,
+            fit_before_pct: before,
+            fit_after_pct: after,
+            beyond_training: input
+                .inputs
+                .iter()
+                .chain(&input.outputs)
+                .filter_map(|x| BeyondTraining::of(x.name, x.values, n_train))
+                .collect(),
+        },
         settings: Some(Settings {
             holdout_fraction: opts.holdout_fraction,
             surrogates: opts.surrogates,

@@ -92,8 +92,17 @@ fn study() {
                     .map(|t| format!("{} {:+.1}", t.physics.name(), t.validation_gain_pct))
                     .collect::<Vec<_>>()
             });
+            let beyond: Vec<String> = d
+                .report
+                .holdout
+                .beyond_training
+                .iter()
+                .map(|b| {
+                    format!("{} {:.1} % by {:.0} %", b.signal, b.share_pct, b.excess_pct.unwrap_or(f64::NAN))
+                })
+                .collect();
             eprintln!(
-                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} | {} | tried {:?}",
+                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} | {} | tried {:?} | beyond {:?}",
                 case.name(),
                 if ok { "ok" } else { "NO" },
                 o.physics,
@@ -101,7 +110,8 @@ fn study() {
                 o.after,
                 if fell { " FELL" } else { "" },
                 r.description,
-                best
+                best,
+                beyond
             );
             if let Ok(dir) = std::env::var("DUMP") {
                 let mut out = String::from("u,y,s,c\n");

@@ -226,6 +226,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let verdict = if gain < 0.0 { ": the correction makes the held-out fit WORSE" } else { "" };
         println!("held-out FIT {k}: {v:.1} % → {after:.1} % (gain {gain:+.1} points){verdict}");
     }
+    for b in &dg.report.holdout.beyond_training {
+        println!("{}", b.sentence());
+    }
     Ok(())
 }
 

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use mpmwatch_core::detect::Signal;
-use mpmwatch_diagnose::{DiagnoseError, DiagnoseInput, DiagnoseOptions, diagnose, diagnose_numbered};
+use mpmwatch_diagnose::{
+    BeyondTraining, DiagnoseError, DiagnoseInput, DiagnoseOptions, diagnose, diagnose_numbered,
+};
 use mpmwatch_sim::Excitation;
 use mpmwatch_sim::scenarios::{Effect, ScenarioSpec, run};
 
@@ -121,6 +123,41 @@ fn report_json_matches_design_4_5() {
     let corrected = std::fs::read_to_string(&cor).unwrap();
     assert!(corrected.starts_with("time,y1\n"), "{}", &corrected[..20]);
     assert_eq!(corrected.lines().count(), 2001);
+}
+
+/// Where the held-out tail leaves the training range: the report's `beyond_training` and the
+/// printed lines are what the library measures on the same columns (the input's tail doubled
+/// here, so that `u1` leaves its range).
+#[test]
+fn a_tail_beyond_the_training_range_is_reported() {
+    let rec = run(&spec(Effect::DeadTime, Excitation::Prbs, 7)).unwrap();
+    let mut u = rec.u[0].clone();
+    u[1400..].iter_mut().for_each(|v| *v *= 2.0);
+    let dir = tmp("beyond");
+    let (recp, simp, rep) = (dir.join("rec.csv"), dir.join("sim.csv"), dir.join("r.json"));
+    write_csv(&recp, &["u1", "d1", "y1"], &[&u, &rec.d[0], &rec.y[0]]);
+    write_csv(&simp, &["y1"], &[&rec.s[0]]);
+    let out = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
+        .args(["diagnose", "--recorded"])
+        .arg(&recp)
+        .arg("--simulated")
+        .arg(&simp)
+        .args(["--inputs", "u1", "--excitations", "d1", "--outputs", "y1", "--report"])
+        .arg(&rep)
+        .arg("--corrected")
+        .arg(dir.join("c.csv"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
+    assert_eq!(v["holdout"]["start_index"], 1400);
+    let expected: Vec<BeyondTraining> =
+        [("u1", &u), ("y1", &rec.y[0])].iter().filter_map(|(n, x)| BeyondTraining::of(n, x, 1400)).collect();
+    assert_eq!(expected.first().map(|b| b.signal.as_str()), Some("u1"));
+    let got: Vec<BeyondTraining> = serde_json::from_value(v["holdout"]["beyond_training"].clone()).unwrap();
+    assert_eq!(got, expected);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(expected.iter().all(|b| stdout.contains(&b.sentence())), "{stdout}");
 }
 
 #[test]
