@@ -38,6 +38,7 @@ mod decide;
 mod describe;
 mod error;
 mod explain;
+mod extrapolation;
 mod fit;
 mod fitness;
 mod frols;

@@ -85,17 +85,12 @@ pub fn dominant_pole(tf: &DiscreteTf, n: usize) -> f64 {
     let start = step.iter().position(|v| (v / fin).abs() > 1e-9).unwrap_or(0);
     let t63 = step.iter().position(|v| v / fin >= 1.0 - (-1.0f64).exp()).unwrap_or(step.len() - 1);
     let log_rest = |t: usize| (1.0 - step[t] / fin).max(1e-300).ln();
-    // The sample before the first move has `ln(1 − y/y∞) = 0`; `t63 ≥ start ≥ 1` since the
-    // step is applied at sample 1.
-    let whole = t63.saturating_sub(start) as f64;
-    let tau = match t63.checked_sub(1) {
-        Some(before) if t63 >= start.max(1) => {
-            let (a, b) = (log_rest(before), log_rest(t63));
-            let frac = if b < a { ((-1.0 - a) / (b - a)).clamp(0.0, 1.0) } else { 1.0 };
-            whole + frac
-        }
-        _ => whole,
-    };
+    // The step is applied at sample 1 from rest, so `step[0]` is 0 and `1 ≤ start ≤ t63` (the
+    // crossing is a move): the sample before it exists, and the one before the first move has
+    // `ln(1 − y/y∞) = 0`.
+    let (a, b) = (log_rest(t63 - 1), log_rest(t63));
+    let frac = if b < a { ((-1.0 - a) / (b - a)).clamp(0.0, 1.0) } else { 1.0 };
+    let tau = (t63 - start) as f64 + frac;
     (-1.0 / tau.max(0.3)).exp().clamp(1e-3, 0.999)
 }
 

@@ -136,20 +136,24 @@ fn the_diagnosis_does_not_depend_on_the_units() {
 }
 
 /// The report says where the held-out tail leaves the training range: a linear record whose
-/// input is doubled over the tail lists `u1`, with the training part's own extremes and the
-/// share of tail rows beyond them (the measure itself has closed-form tests in the library).
+/// input and output are doubled over the tail lists both, each with the training part's own
+/// extremes and the share of tail rows beyond them (the measure itself has closed-form tests
+/// in the library).
 #[test]
 fn a_tail_beyond_the_training_range_is_reported() {
     let mut r = run(PhysicalCase::Linear, 1500, 1).unwrap();
     let start = diagnose_record(&r).report.holdout.start_index;
     r.u[start..].iter_mut().for_each(|v| *v *= 2.0);
+    r.y[start..].iter_mut().for_each(|v| *v *= 2.0);
     let h = diagnose_record(&r).report.holdout;
-    let b = h.beyond_training.iter().find(|b| b.signal == "u1").expect("u1 leaves its range");
-    let train = &r.u[..start];
-    let lo = train.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = train.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    assert_eq!(b.training, [lo, hi]);
-    let outside = r.u[start..].iter().filter(|&&v| v < lo || v > hi).count();
-    assert!(outside > 0);
-    assert_eq!(b.share_pct, 100.0 * outside as f64 / (r.u.len() - start) as f64);
+    for (name, x) in [("u1", &r.u), ("y1", &r.y)] {
+        let b = h.beyond_training.iter().find(|b| b.signal == name).expect("the tail leaves its range");
+        let train = &x[..start];
+        let lo = train.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = train.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(b.training, [lo, hi], "{name}");
+        let outside = x[start..].iter().filter(|&&v| v < lo || v > hi).count();
+        assert!(outside > 0, "{name}");
+        assert_eq!(b.share_pct, 100.0 * outside as f64 / (x.len() - start) as f64, "{name}");
+    }
 }

@@ -97,8 +97,9 @@ fn study() {
                 .holdout
                 .beyond_training
                 .iter()
-                .map(|b| {
-                    format!("{} {:.1} % by {:.0} %", b.signal, b.share_pct, b.excess_pct.unwrap_or(f64::NAN))
+                .map(|b| match b.excess_pct {
+                    Some(e) => format!("{} {:.1} % by {e:.0} %", b.signal, b.share_pct),
+                    None => format!("{} {:.1} %", b.signal, b.share_pct),
                 })
                 .collect();
             eprintln!(

@@ -226,8 +226,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let verdict = if gain < 0.0 { ": the correction makes the held-out fit WORSE" } else { "" };
         println!("held-out FIT {k}: {v:.1} % → {after:.1} % (gain {gain:+.1} points){verdict}");
     }
-    for b in &dg.report.holdout.beyond_training {
-        println!("{}", b.sentence());
+    // A caution on the held-out gain of a correction; with none there is nothing extrapolated.
+    if dg.report.findings.iter().any(|f| f.physics != mpmwatch_diagnose::Physics::Unexplained) {
+        for b in &dg.report.holdout.beyond_training {
+            println!("{}", b.sentence());
+        }
     }
     Ok(())
 }
