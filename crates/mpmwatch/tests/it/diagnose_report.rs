@@ -1,8 +1,8 @@
 //! The `diagnose` contract: the report JSON has the shape of DESIGN.md §4.5, bad input gives an
 //! error naming the offending column or file, and a disturbance-only change yields no finding.
 
-use std::path::PathBuf;
-use std::process::Command;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_diagnose::{
@@ -48,6 +48,26 @@ fn write_csv(path: &PathBuf, names: &[&str], cols: &[&[f64]]) {
     std::fs::write(path, s).unwrap();
 }
 
+/// `mpmwatch diagnose` on one input `u1` with its dither `d1`, output `y1` and its simulation
+/// `s`, written as CSV into `dir`; the report goes to `dir/r.json`, the corrected simulation to
+/// `dir/c.csv`.
+fn diagnose_cli(dir: &Path, u: &[f64], d: &[f64], y: &[f64], s: &[f64]) -> Output {
+    let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
+    write_csv(&recp, &["u1", "d1", "y1"], &[u, d, y]);
+    write_csv(&simp, &["y1"], &[s]);
+    Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
+        .args(["diagnose", "--recorded"])
+        .arg(&recp)
+        .arg("--simulated")
+        .arg(&simp)
+        .args(["--inputs", "u1", "--excitations", "d1", "--outputs", "y1", "--report"])
+        .arg(dir.join("r.json"))
+        .arg("--corrected")
+        .arg(dir.join("c.csv"))
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn disturbance_only_change_yields_no_finding() {
     for seed in [3, 4] {
@@ -63,21 +83,8 @@ fn disturbance_only_change_yields_no_finding() {
 fn report_json_matches_design_4_5() {
     let rec = run(&spec(Effect::DeadTime, Excitation::Prbs, 7)).unwrap();
     let dir = tmp("json");
-    let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
-    write_csv(&recp, &["u1", "d1", "y1"], &[&rec.u[0], &rec.d[0], &rec.y[0]]);
-    write_csv(&simp, &["y1"], &[&rec.s[0]]);
+    let out = diagnose_cli(&dir, &rec.u[0], &rec.d[0], &rec.y[0], &rec.s[0]);
     let (rep, cor) = (dir.join("r.json"), dir.join("c.csv"));
-    let out = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
-        .args(["diagnose", "--recorded"])
-        .arg(&recp)
-        .arg("--simulated")
-        .arg(&simp)
-        .args(["--inputs", "u1", "--excitations", "d1", "--outputs", "y1", "--report"])
-        .arg(&rep)
-        .arg("--corrected")
-        .arg(&cor)
-        .output()
-        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
     assert_eq!(v["mismatch"], true);
@@ -136,20 +143,8 @@ fn a_tail_beyond_the_training_range_is_reported() {
     u[1400..].iter_mut().for_each(|v| *v *= 2.0);
     d[1400..].iter_mut().for_each(|v| *v *= 2.0);
     let dir = tmp("beyond");
-    let (recp, simp, rep) = (dir.join("rec.csv"), dir.join("sim.csv"), dir.join("r.json"));
-    write_csv(&recp, &["u1", "d1", "y1"], &[&u, &d, &rec.y[0]]);
-    write_csv(&simp, &["y1"], &[&rec.s[0]]);
-    let out = Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
-        .args(["diagnose", "--recorded"])
-        .arg(&recp)
-        .arg("--simulated")
-        .arg(&simp)
-        .args(["--inputs", "u1", "--excitations", "d1", "--outputs", "y1", "--report"])
-        .arg(&rep)
-        .arg("--corrected")
-        .arg(dir.join("c.csv"))
-        .output()
-        .unwrap();
+    let out = diagnose_cli(&dir, &u, &d, &rec.y[0], &rec.s[0]);
+    let rep = dir.join("r.json");
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
     assert_eq!(v["holdout"]["start_index"], 1400);
