@@ -480,7 +480,7 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     out.extend((1..=8).map(Term::DeadTime));
     // The dominant pole is the linear nominal's also where polynomial channels exist: their
     // denominator is shared by every power of every input, so their linearisation's step is a
-    // poor reading of one channel's speed (docs/diagnose.md, stop 40).
+    // poor reading of one channel's speed (docs/diagnose-history.md, stop 40).
     let p0 = ctx.model.dominant_pole(i, 2000);
     let tau0 = -1.0 / p0.ln();
     for rho in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0] {

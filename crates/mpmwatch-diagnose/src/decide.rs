@@ -57,7 +57,7 @@ pub(crate) fn decide(
     // A closed loop has its own margin (larger by default) and no block is required to gain: there the plain
     // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
     // so small average gains are noise, while large ones that lost on one block held up on the
-    // held-out tail (docs/diagnose.md, "The closed loop's margin"). A smaller gain passes there
+    // held-out tail (docs/diagnose-history.md, "The closed loop's margin"). A smaller gain passes there
     // too when it is consistent (the open-loop margin on average, no block lower) and the data
     // single out its class: its score leads every other class's by `CLASS_LEAD`. A small gain
     // that several classes share says that something is there, not what.

@@ -52,7 +52,7 @@ pub struct DiagnoseOptions {
     /// (default 2.0 points on average, no condition on single blocks). There the plain FIT is a
     /// weaker witness (feedback lets a correction cancel part of the disturbance), so its
     /// cross-validated gain is noisier: of five development findings with 0.5 to 2 points, three
-    /// fell on the held-out tail (docs/diagnose.md, "The closed loop's margin"). A smaller gain
+    /// fell on the held-out tail (docs/diagnose-history.md, "The closed loop's margin"). A smaller gain
     /// still passes at `min_gain_pct` on average when no block is lower and its class's score
     /// leads every other class's by 10 units (the data single out what was left out).
     pub closed_loop_min_gain_pct: f64,
@@ -64,7 +64,7 @@ pub struct DiagnoseOptions {
     /// instead of residual corrections, each fitted by its one-step prediction error under an
     /// AR noise model and ranked by it out of sample (the honesty gate stays the plain FIT's).
     /// Off by default: on the wide generator it names fewer cases right than the residual
-    /// corrections (docs/diagnose.md, "Closed loop, the grey-box path").
+    /// corrections (docs/diagnose-history.md, "Closed loop, the grey-box path").
     pub greybox_closed_loop: bool,
     /// The MI matrix's decision rule in the locating step: [`Method::Family`] (default), one
     /// family-wise test per element over the lags and the statistics (pairwise MI, joint-lag

@@ -429,12 +429,12 @@ const PAIRING_SURROGATES: usize = 99;
 /// with the shifts evenly spaced the true alignment is one of 100 nearly exchangeable ones (for
 /// stationary series; not exactly, since a shifted move jumps where it wraps round), so a move
 /// that does not answer the output beats the rest with probability about 1 % when the series'
-/// correlation times are short against the record (more for very slow series: docs/diagnose.md,
-/// stop 37). The χ² law of `n·R²`, which assumes independent rows, is passed by chance far more
-/// often on autocorrelated process data, and shifts bunched away from the true alignment are too
-/// (they behave like fewer surrogates). `None`: the move does not beat every shift, a constant
-/// increment, fewer than 100 rows (no distinct shifts), or a failed fit (then no shift counts
-/// as beaten).
+/// correlation times are short against the record (more for very slow series:
+/// docs/diagnose-history.md, stop 37). The χ² law of `n·R²`, which assumes independent rows,
+/// is passed by chance far more often on autocorrelated process data, and shifts bunched away
+/// from the true alignment are too (they behave like fewer surrogates). `None`: the move does
+/// not beat every shift, a constant increment, fewer than 100 rows (no distinct shifts), or a
+/// failed fit (then no shift counts as beaten).
 fn pi_law_fit(du: &[f64], y: [&[f64]; 3]) -> Option<f64> {
     let m = du.len();
     if m < PAIRING_SURROGATES + 1 {
@@ -736,8 +736,8 @@ mod tests {
     /// between the blocks (levels 0, +8, −8) the differenced model predicts better: one constant
     /// fitted over two levels, the model of the levels misses the validation block's level on
     /// every row, the differenced one on its first row only. The two errors share their
-    /// innovations, so their ratio varies little from seed to seed (margins in docs/diagnose.md,
-    /// stop 41). `rank` scores each hypothesis under both models.
+    /// innovations, so their ratio varies little from seed to seed (margins in
+    /// docs/diagnose-history.md, stop 41). `rank` scores each hypothesis under both models.
     #[test]
     fn the_integrated_noise_model_wins_only_for_a_wandering_disturbance() {
         let ar = ar1(14, 30_000);

@@ -115,7 +115,7 @@ enum Verb {
     /// Record length: the training part must hold the plant's slow modes several times over,
     /// since a correction slower than a validation block is withheld. On generated open-loop
     /// cases, 3000 samples name the physics in about 84 % of cases and 1500 in about 75 %
-    /// (docs/diagnose.md, stop 45).
+    /// (docs/diagnose-history.md, stop 45).
     ///
     /// Example: mpmwatch diagnose --recorded rec.csv --simulated sim.csv --inputs u1,u2
     ///          --excitations d1,d2 --outputs y1,y2 --report diag.json --corrected corr.csv

@@ -133,7 +133,7 @@ fn varies(y: &[f64]) -> bool {
 /// record the one-step prediction error under the fit's noise model) of a [`fit`] at two poles
 /// and two taps, then poles and taps by cross-validation ([`CvScore::rank`] against `base`). The dead time is judged on
 /// a fit by simulation error, not on the equation-error fit alone, which coloured noise and a
-/// slow pole bias (docs/diagnose.md, "The dead-time search of the linear re-fit").
+/// slow pole bias (docs/diagnose-history.md, "The dead-time search of the linear re-fit").
 pub fn linear_orders(
     d: &Data<'_>,
     folds: &[(Vec<usize>, std::ops::Range<usize>)],

@@ -15,7 +15,7 @@
 //! slowest pole's time constant shorter than the shortest block. A block checks what a model
 //! does within it; a slower mode sets the level the simulation carries from block to block,
 //! which no block checks and the held-out tail, longer than a block, exposes (a near-integrator
-//! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose.md, stop
+//! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose-history.md, stop
 //! 42). A correction that does not settle is withheld as `unexplained`, with its time constant.
 //!
 //! A named element must also act: an element with a kink (a limit, a dead zone) whose fitted
@@ -59,7 +59,7 @@ const FIRST_MOVE: f64 = 0.01;
 /// ([`Element::acting`]): a limit beyond the record binds on none, and the element is then its
 /// linear part under a nonlinear name (an extra pole, for a store); one that binds on a handful
 /// is placed by those few noisy samples. One row in a hundred is about twenty rows of a
-/// training part of 2100, seven a validation block on average (docs/diagnose.md, stop 44, has
+/// training part of 2100, seven a validation block on average (docs/diagnose-history.md, stop 44, has
 /// the shares the named findings reach).
 pub const MIN_ACTING: f64 = 0.01;
 
