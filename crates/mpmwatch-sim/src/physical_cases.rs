@@ -377,7 +377,17 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
 /// The user's nominal: an ARX model of [`NOMINAL_ORDERS`] fitted by least squares on the whole
 /// record, simulated from the recorded input in steady state at its first sample.
 pub fn nominal_simulation(u: &[f64], y: &[f64]) -> Result<Vec<f64>, SimError> {
-    let (na, nb, nk) = NOMINAL_ORDERS;
+    nominal_simulation_of(u, y, NOMINAL_ORDERS)
+}
+
+/// [`nominal_simulation`] with other ARX orders `(na, nb, nk)`: a user who fits another model
+/// first (a first-order lag, a higher order), for studies of how the diagnosis fares when the
+/// nominal is not the one it was developed against.
+pub fn nominal_simulation_of(
+    u: &[f64],
+    y: &[f64],
+    (na, nb, nk): (usize, usize, usize),
+) -> Result<Vec<f64>, SimError> {
     let orders = ArxOrders { na, nb, delays: vec![nk] };
     let arx = Arx::fit(y, &[u], &orders, 0..y.len())
         .ok_or_else(|| SimError::parameter("nominal ARX fit", y.len(), "least squares failed"))?;
