@@ -246,11 +246,12 @@ pub fn explain(
             },
         ),
         (Some((physics, tau, mean, worst)), ..) => format!(
-            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next, so it is not reported",
+            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next, so it is not reported{}",
             names.output,
             if physics == Physics::Unexplained { "a re-fitted linear model" } else { physics.name() },
             tau_text(tau),
             block,
+            record_for(tau, block, d.y.len()),
         ),
         (None, None, Some((v, k, ..)), Some((_, lv))) => format!(
             "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
@@ -270,6 +271,19 @@ pub fn explain(
         curve: None,
         withheld,
     }
+}
+
+/// The advice beside a correction withheld as slower than a validation block: the record
+/// length, with the same share held out, whose blocks would be as long as its time constant
+/// `tau` (blocks grow with the record); empty for an integrator.
+fn record_for(tau: f64, block: f64, n: usize) -> String {
+    if !(tau.is_finite() && block > 0.0) {
+        return String::new();
+    }
+    format!(
+        "; a record of at least {:.0} samples, with the same share held out, would give blocks that long",
+        (tau / block * n as f64).ceil()
+    )
 }
 
 fn finding(
@@ -565,6 +579,11 @@ mod tests {
         let stated: f64 = head.rsplit(' ').next().and_then(|v| v.parse().ok()).expect(&slow.summary);
         assert!((stated / (-1.0 / 0.998f64.ln()) - 1.0).abs() < 0.01, "{}", slow.summary);
         assert!(slow.summary.contains("a re-fitted linear model"), "{}", slow.summary);
+        // The record that would check it: blocks a third of 70 % of it, as long as the time
+        // constant; from the stated (rounded) value, so within two samples.
+        let (_, tail) = slow.summary.split_once("a record of at least ").expect(&slow.summary);
+        let advised: f64 = tail.split(' ').next().and_then(|v| v.parse().ok()).expect(&slow.summary);
+        assert!((advised - stated * 1500.0 / 350.0).abs() <= 2.0, "{}", slow.summary);
     }
 
     #[test]
