@@ -113,8 +113,8 @@ enum Verb {
     /// a correction is extrapolated there.
     ///
     /// Record length: the training part must hold the plant's slow modes several times over,
-    /// since a correction slower than a validation block is withheld (the finding then says
-    /// how long a record would let the blocks check it). On generated open-loop
+    /// since a correction slower than a validation block is withheld (unless it is an
+    /// integrator, the finding then says how long a record would give blocks that long). On generated open-loop
     /// cases, 3000 samples name the physics in about 84 % of cases and 1500 in about 75 %
     /// (docs/diagnose-history.md, stop 45).
     ///

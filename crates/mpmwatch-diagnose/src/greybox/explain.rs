@@ -238,9 +238,10 @@ pub fn explain(
             100.0 * MIN_ACTING,
             match slow {
                 Some((_, tau, ..)) => format!(
-                    "the re-fitted linear model tried in its place has a slowest time constant of {} samples, longer than the {} samples of a validation block",
+                    "the re-fitted linear model tried in its place has a slowest time constant of {} samples, longer than the {} samples of a validation block{}",
                     tau_text(tau),
-                    block
+                    block,
+                    record_for(tau, block, d.y.len()),
                 ),
                 None => "no re-fitted linear model is reported in its place".to_string(),
             },
@@ -281,8 +282,8 @@ fn record_for(tau: f64, block: f64, n: usize) -> String {
         return String::new();
     }
     format!(
-        "; a record of at least {:.0} samples, with the same share held out, would give blocks that long",
-        (tau / block * n as f64).ceil()
+        "; a record of at least {} samples, with the same share held out, would give blocks that long",
+        num((tau / block * n as f64).ceil())
     )
 }
 

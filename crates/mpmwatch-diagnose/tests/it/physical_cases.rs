@@ -1,6 +1,6 @@
 //! Open-loop physical cases (`mpmwatch_sim::physical_cases`, 3000 samples) diagnosed with the
 //! user's least-squares ARX nominal: the grey-box step names the physics and the held-out FIT
-//! rises. Seeds 1–3 are the development seeds of docs/diagnose.md; the report seeds are
+//! rises. Seeds 1–3 are the development seeds of docs/diagnose-history.md; the report seeds are
 //! measured by the ignored study, not here.
 
 use super::physical_study::{diagnose_against, diagnose_record};

@@ -83,13 +83,18 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     if let Some(share) = white {
         let m = r.plant.iter().sum::<f64>() / r.plant.len() as f64;
         let var = r.plant.iter().map(|v| (v - m).powi(2)).sum::<f64>() / r.plant.len() as f64;
-        let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x5EED_0F_5EED);
+        // One stream per seed, the same for every class at that seed (the plants differ).
+        let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x005E_ED0F_5EED);
         let e = mpmwatch_sim::white_gaussian(r.y.len(), share * var, &mut rng).unwrap();
         r.y.iter_mut().zip(&e).for_each(|(y, e)| *y += e);
+        r.noise_share += share;
         r.description += &format!("; white noise {:.0} % of the plant's variance added", 100.0 * share);
     }
     if white.is_some() || orders.is_some() {
         let o = orders.unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
+        if orders.is_some() {
+            r.description += &format!("; nominal ARX [{} {} {}]", o.0, o.1, o.2);
+        }
         r.s = nominal_simulation_of(&r.u, &r.y, o).expect("nominal");
     }
     r

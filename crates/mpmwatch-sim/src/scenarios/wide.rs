@@ -161,7 +161,8 @@ fn loop_is_stable(spec: &ScenarioSpec) -> bool {
 /// channel, as in the casebook.
 pub fn wide_specs(count: usize, n: usize, seed: u64) -> Vec<ScenarioSpec> {
     use Effect::*;
-    // In this order: the seeds of the studies in docs/diagnose.md draw by index into it.
+    // In this order: the seeds of the studies (docs/diagnose-history.md, docs/status.md) draw by
+    // index into it.
     const EFFECTS: [Effect; 15] = [
         Gain,
         TimeConstant,
