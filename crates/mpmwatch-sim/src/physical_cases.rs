@@ -405,6 +405,24 @@ pub fn nominal_simulation_of(
 mod tests {
     use super::*;
 
+    /// The orders reach the fit: a noise-free first-order lag with two samples of dead time,
+    /// `y(t) = 0.9 y(t−1) + 0.1 u(t−2)`, started at rest at its first input as the nominal's
+    /// simulation is, is reproduced exactly by an ARX [1 1 2] (to the least-squares solve's
+    /// rounding; 1e-9 of a unit step) and not by an ARX [1 1 1], which has no way to wait the
+    /// second sample.
+    #[test]
+    fn the_nominal_takes_the_orders_it_is_given() {
+        let n = 600;
+        let u: Vec<f64> = (0..n).map(|t| if (t / 25) % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let mut y = vec![u[0]; n];
+        for t in 2..n {
+            y[t] = 0.9 * y[t - 1] + 0.1 * u[t - 2];
+        }
+        let err = |s: &[f64]| s.iter().zip(&y).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(err(&nominal_simulation_of(&u, &y, (1, 1, 2)).unwrap()) < 1e-9);
+        assert!(err(&nominal_simulation_of(&u, &y, (1, 1, 1)).unwrap()) > 1e-3);
+    }
+
     /// Every case runs on a few seeds, its nominal is finite, and the nominal of the linear
     /// case fits its noise-free part well (an ARX [2 2 1] of a sampled second-order plant is
     /// close to exact; the noise is at most 15 % of the variance, so the simulation's FIT
