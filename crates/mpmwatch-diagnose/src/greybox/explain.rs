@@ -16,13 +16,19 @@
 //! does within it; a slower mode sets the level the simulation carries from block to block,
 //! which no block checks and the held-out tail, longer than a block, exposes (a near-integrator
 //! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose-history.md, stop
-//! 42). A correction that does not settle is withheld as `unexplained`, with its time constant.
+//! 42). A correction that does not settle is withheld, with its time constant.
 //!
 //! A named element must also act: an element with a kink (a limit, a dead zone) whose fitted
 //! kink lies where the record hardly goes, on fewer than [`MIN_ACTING`] of the training rows,
-//! is its linear part under a nonlinear name, and the linear re-fit is tried in its place.
+//! is its linear part under a nonlinear name, and is withheld.
 //!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
+//! An idle element gives way to the next by the same rule (the walk down the ranking), its
+//! score joining the linear standard the next must beat by [`NONLINEAR_MARGIN`]: two elements
+//! can differ only in whether their nonlinearity acts where the record goes (an actuator limit
+//! on the present input, the cap of a store that fills), so the first may be idle where the
+//! second is not. A slow element ends the walk, and the linear re-fit is tried. When nothing
+//! is reported, the finding is `unexplained` and says why, the first few in the order tried.
 //!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
@@ -152,109 +158,111 @@ pub fn explain(
     let passes = |v: &CvScore| v.mean - nominal_cv.mean >= min_gain && v.min_gain_over(&nominal_cv) >= 0.0;
     let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
     let block = folds.iter().map(|f| f.1.len()).min().unwrap_or(0) as f64;
-    // A correction that passed the gate but does not settle within a block: its class, its
-    // slowest time constant in samples and its cross-validated gains (mean, worst block).
-    let mut slow: Option<(Physics, f64, f64, f64)> = None;
-    let mut settles = |m: &Model<'_>, f: &Fitted, physics: Physics, v: &CvScore| {
+    // Each correction that passed the gate and was not reported, in the order tried.
+    let mut withheld: Vec<Withheld> = Vec::new();
+    let held = |physics: Physics, why: Why, v: &CvScore| Withheld {
+        physics,
+        why,
+        mean: v.mean - nominal_cv.mean,
+        worst: v.min_gain_over(&nominal_cv),
+    };
+    let time_constant = |m: &Model<'_>, f: &Fitted| {
         let r = m.slowest_pole(f);
-        let tau = if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() };
-        let ok = tau < block;
-        if !ok && slow.is_none() {
-            slow = Some((physics, tau, v.mean - nominal_cv.mean, v.min_gain_over(&nominal_cv)));
-        }
-        ok
+        if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() }
     };
-    // A chosen element whose nonlinearity acts on too few training rows: its class, the share
-    // and its cross-validated gains (mean, worst block).
-    let mut idle: Option<(Physics, f64, f64, f64)> = None;
-    let mut acts = |m: &Model<'_>, f: &Fitted, sim: &[f64], v: &CvScore| {
-        let share = m.acting_share(f, &d.u, sim, &train_rows);
-        let ok = share.is_none_or(|s| s >= MIN_ACTING);
-        if let (false, Some(s)) = (ok, share) {
-            idle = Some((m.element.physics(), s, v.mean - nominal_cv.mean, v.min_gain_over(&nominal_cv)));
+    // The walk down the ranking: the parsimony rule picks among the candidates left, and an
+    // idle element gives way to the next. It is its linear part under a nonlinear name, so its
+    // score joins the linear standard the next one must beat by the margin. A slow one ends
+    // the walk: the record then has a slow mode the blocks cannot check, and a faster element
+    // ranked below it settles by leaving that mode out (a tank's walk reached a friction that
+    // fell on the tail, docs/diagnose-history.md, stop 47).
+    let mut left: Vec<&(CvScore, usize, usize, usize, usize)> = scored.iter().collect();
+    let mut standard = linear_cv;
+    while let Some(pos) = chosen(&left, &rank) {
+        let (v, k, i, _, o) = left.swap_remove(pos);
+        if rank(v) - standard < NONLINEAR_MARGIN || !passes(v) {
+            break;
         }
-        ok
-    };
-    let best = scored.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
-    let chosen = scored
-        .iter()
-        .filter(|s| rank(&s.0) >= best - PARSIMONY)
-        .min_by(|a, b| a.3.cmp(&b.3).then(rank(&b.0).total_cmp(&rank(&a.0))));
-    if let Some((v, k, i, _, o)) = chosen
-        && rank(v) - linear_cv >= NONLINEAR_MARGIN
-        && passes(v)
-    {
         let (k, i, o) = (*k, *i, *o);
         let el = els[k].as_ref();
         let m = Model { element: el, input: i, orders: order_sets[o].clone() };
-        if let Some(f) = fit(&m, d, &train_rows)
-            && settles(&m, &f, el.physics(), v)
-            && let Some(sim) = m.simulate(&f, &d.u, d.y)
-            && acts(&m, &f, &sim, v)
-        {
-            let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
-            return Explanation {
-                finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried),
-                corrected: Some(sim),
-                curve: m.curve(&f, d, names.inputs[i], names.output),
-                withheld: false,
-            };
+        let Some(f) = fit(&m, d, &train_rows) else { continue };
+        let tau = time_constant(&m, &f);
+        if tau >= block {
+            withheld.push(held(el.physics(), Why::Slow(tau), v));
+            break;
         }
+        let Some(sim) = m.simulate(&f, &d.u, d.y) else { continue };
+        if let Some(share) = m.acting_share(&f, &d.u, &sim, &train_rows).filter(|s| *s < MIN_ACTING) {
+            withheld.push(held(el.physics(), Why::Idle(share), v));
+            standard = standard.max(rank(v));
+            continue;
+        }
+        let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+        return Explanation {
+            finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried),
+            corrected: Some(sim),
+            curve: m.curve(&f, d, names.inputs[i], names.output),
+            withheld: false,
+        };
     }
     if let Some((orders, v)) = &linear
         && passes(v)
     {
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
-        if let Some(f) = fit(&m, d, &train_rows)
-            && settles(&m, &f, Physics::Unexplained, v)
-            && let Some(sim) = m.simulate(&f, &d.u, d.y)
-        {
-            let i = flagged.first().copied().unwrap_or(0);
-            let modelled = nominal.has_channel(i, d.u[i], s);
-            let (physics, summary, parameters, curve) =
-                linear_change(nominal, &f, orders, i, modelled, ts, names);
-            tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v.mean - nominal_cv.mean });
-            return Explanation {
-                finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
-                corrected: Some(sim),
-                curve: Some(curve),
-                withheld: false,
-            };
+        if let Some(f) = fit(&m, d, &train_rows) {
+            let tau = time_constant(&m, &f);
+            if tau >= block {
+                withheld.push(held(Physics::Unexplained, Why::Slow(tau), v));
+            } else if let Some(sim) = m.simulate(&f, &d.u, d.y) {
+                let i = flagged.first().copied().unwrap_or(0);
+                let modelled = nominal.has_channel(i, d.u[i], s);
+                let (physics, summary, parameters, curve) =
+                    linear_change(nominal, &f, orders, i, modelled, ts, names);
+                tried.push(Tried {
+                    physics,
+                    score_vs_null: None,
+                    validation_gain_pct: v.mean - nominal_cv.mean,
+                });
+                return Explanation {
+                    finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
+                    corrected: Some(sim),
+                    curve: Some(curve),
+                    withheld: false,
+                };
+            }
         }
     }
     let top = scored.iter().max_by(|a, b| rank(&a.0).total_cmp(&rank(&b.0)));
-    let withheld = slow.is_some() || idle.is_some();
-    let tau_text = |tau: f64| {
-        if tau.is_finite() { num(tau) } else { "infinite (an integrator or unstable)".to_string() }
-    };
-    let summary = match (slow, idle, top, &linear) {
-        // Only the element chosen can be idle, and only once it has settled: a slow correction
-        // beside it is the linear re-fit tried in its place.
-        (slow, Some((physics, share, mean, worst)), ..) => format!(
-            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %), so its gain is its linear part's and it is not reported; {}",
-            names.output,
-            physics.name(),
-            100.0 * share,
-            100.0 * MIN_ACTING,
-            match slow {
-                Some((_, tau, ..)) => format!(
-                    "the re-fitted linear model tried in its place has a slowest time constant of {} samples, longer than the {} samples of a validation block{}",
-                    tau_text(tau),
-                    block,
-                    record_for(tau, block, d.y.len()),
-                ),
-                None => "no re-fitted linear model is reported in its place".to_string(),
-            },
-        ),
-        (Some((physics, tau, mean, worst)), ..) => format!(
-            "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {mean:+.1} points on average ({worst:+.1} on its worst block), but its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next, so it is not reported{}",
-            names.output,
-            if physics == Physics::Unexplained { "a re-fitted linear model" } else { physics.name() },
-            tau_text(tau),
-            block,
-            record_for(tau, block, d.y.len()),
-        ),
-        (None, None, Some((v, k, ..)), Some((_, lv))) => format!(
+    let summary = match (withheld.split_first(), top, &linear) {
+        (Some((first, next)), ..) => {
+            let mut text = format!(
+                "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {:+.1} points on average ({:+.1} on its worst block), but {}, so it is not reported{}",
+                names.output,
+                first.name(),
+                first.mean,
+                first.worst,
+                first.why.text(block),
+                first.why.advice(block, d.y.len()),
+            );
+            for w in next.iter().take(MAX_WITHHELD_TOLD - 1) {
+                text += &format!(
+                    "; the next, {} ({:+.1} points), is not reported either: {}{}",
+                    w.name(),
+                    w.mean,
+                    w.why.text(block),
+                    w.why.advice(block, d.y.len())
+                );
+            }
+            if next.len() >= MAX_WITHHELD_TOLD {
+                text += &format!("; {} more were not reported either", next.len() + 1 - MAX_WITHHELD_TOLD);
+            }
+            if matches!(first.why, Why::Idle(_)) && !next.iter().any(|w| w.physics == Physics::Unexplained) {
+                text += "; no re-fitted linear model is reported in its place";
+            }
+            text
+        }
+        (None, Some((v, k, ..)), Some((_, lv))) => format!(
             "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
             names.output,
             els[*k].physics().name(),
@@ -266,12 +274,78 @@ pub fn explain(
         _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
     };
     let i = flagged.first().copied().unwrap_or(0);
+    let withheld = !withheld.is_empty();
     Explanation {
         finding: finding(names, i, Physics::Unexplained, ActsOn::Input, summary, BTreeMap::new(), tried),
         corrected: None,
         curve: None,
         withheld,
     }
+}
+
+/// How many withheld corrections an `unexplained` finding describes one by one.
+const MAX_WITHHELD_TOLD: usize = 3;
+
+/// A correction that passed the gate against the nominal and was not reported.
+struct Withheld {
+    /// Its class (`Unexplained` for the re-fitted linear model).
+    physics: Physics,
+    why: Why,
+    /// Its cross-validated FIT gain over the nominal, on average and on its worst block.
+    mean: f64,
+    worst: f64,
+}
+
+impl Withheld {
+    fn name(&self) -> &'static str {
+        if self.physics == Physics::Unexplained { "a re-fitted linear model" } else { self.physics.name() }
+    }
+}
+
+/// Why a correction was withheld.
+enum Why {
+    /// Its slowest time constant, in samples, is at least a validation block.
+    Slow(f64),
+    /// Its nonlinearity acts on this share of the training rows, under [`MIN_ACTING`].
+    Idle(f64),
+}
+
+impl Why {
+    /// What record would check a slow correction ([`record_for`]); empty otherwise.
+    fn advice(&self, block: f64, n: usize) -> String {
+        match *self {
+            Why::Slow(tau) => record_for(tau, block, n),
+            Why::Idle(_) => String::new(),
+        }
+    }
+
+    /// The reason in words, with `block` the shortest validation block.
+    fn text(&self, block: f64) -> String {
+        match *self {
+            Why::Slow(tau) => format!(
+                "its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next",
+                if tau.is_finite() { num(tau) } else { "infinite (an integrator or unstable)".to_string() },
+                block,
+            ),
+            Why::Idle(share) => format!(
+                "its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %), so its gain is its linear part's",
+                100.0 * share,
+                100.0 * MIN_ACTING,
+            ),
+        }
+    }
+}
+
+/// The parsimony rule over the candidates `left`: among those within [`PARSIMONY`] points of
+/// the best by `rank`, the one with the fewest parameters (the better ranked on a tie); its
+/// position in `left`.
+fn chosen(left: &[&(CvScore, usize, usize, usize, usize)], rank: &impl Fn(&CvScore) -> f64) -> Option<usize> {
+    let best = left.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
+    left.iter()
+        .enumerate()
+        .filter(|(_, s)| rank(&s.0) >= best - PARSIMONY)
+        .min_by(|(_, a), (_, b)| a.3.cmp(&b.3).then(rank(&b.0).total_cmp(&rank(&a.0))))
+        .map(|(p, _)| p)
 }
 
 /// The advice beside a correction withheld as slower than a validation block: the record
@@ -585,6 +659,29 @@ mod tests {
         let (_, tail) = slow.summary.split_once("a record of at least ").expect(&slow.summary);
         let advised: f64 = tail.split(' ').next().and_then(|v| v.parse().ok()).expect(&slow.summary);
         assert!((advised - stated * 1500.0 / 350.0).abs() <= 2.0, "{}", slow.summary);
+    }
+
+    /// The parsimony rule and the walk down the ranking it serves: among candidates within
+    /// half a point of the best, the fewest parameters win; on equal counts the better score;
+    /// a candidate taken out hands the choice to the rule over those left.
+    #[test]
+    fn the_parsimony_rule_takes_the_simplest_within_half_a_point() {
+        let c = |mean: f64, complexity: usize| {
+            (CvScore { mean, blocks: vec![mean], prediction_rms: vec![] }, 0, 0, complexity, 0)
+        };
+        let (a, b, b2, e) = (c(50.0, 9), c(49.7, 7), c(49.6, 7), c(49.4, 5));
+        let rank = |v: &CvScore| v.mean;
+        let mut left = vec![&a, &b, &b2, &e];
+        // `e` is simplest but 0.6 below the best; `b` and `b2` tie on parameters.
+        assert_eq!(chosen(&left, &rank), Some(1));
+        left.swap_remove(1);
+        assert_eq!(chosen(&left, &rank).map(|p| left[p].0.mean), Some(49.6));
+        left.retain(|s| s.0.mean != 49.6);
+        assert_eq!(chosen(&left, &rank).map(|p| left[p].0.mean), Some(50.0));
+        // Without the best, `e` is within half a point of what is left and simplest.
+        left.retain(|s| s.0.mean != 50.0);
+        assert_eq!(chosen(&left, &rank).map(|p| left[p].0.mean), Some(49.4));
+        assert_eq!(chosen(&[], &rank), None);
     }
 
     #[test]

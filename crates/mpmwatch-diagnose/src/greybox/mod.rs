@@ -35,6 +35,7 @@ mod linear;
 mod noise;
 mod polynomial;
 mod saturation;
+mod sensor_polynomial;
 mod stiffness;
 mod storage_limit;
 mod structure;
@@ -550,6 +551,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(storage_limit::StorageLimit),
         Box::new(clip_sensor::ClipSensor),
         Box::new(abs_sensor::AbsSensor),
+        Box::new(sensor_polynomial::SensorPolynomial),
         Box::new(polynomial::Polynomial { degree: 2 }),
         Box::new(bilinear::Bilinear),
         Box::new(stiffness::CubicStiffness),

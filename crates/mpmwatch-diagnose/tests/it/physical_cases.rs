@@ -3,9 +3,9 @@
 //! rises. Seeds 1–3 are the development seeds of docs/diagnose-history.md; the report seeds are
 //! measured by the ignored study, not here.
 
-use super::physical_study::{diagnose_against, diagnose_record};
-use mpmwatch_diagnose::Physics;
-use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, run};
+use super::physical_study::{bent, diagnose_against, diagnose_record};
+use mpmwatch_diagnose::{ActsOn, Physics};
+use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, nominal_simulation, run};
 
 fn named(case: PhysicalCase, seed: u64) {
     let r = run(case, 3000, seed).unwrap();
@@ -40,6 +40,25 @@ fn clipping_sensor() {
 #[test]
 fn duffing_spring() {
     named(PhysicalCase::Duffing, 2);
+}
+
+/// A linear plant read through a sensor whose characteristic bends by a square law (a
+/// Wiener model), either way: named `quadratic` on the output, not on the input, and the
+/// held-out FIT rises. The bend, 0.3 standard deviations at one standard deviation, is the
+/// middle of the study's `SENSOR=0.5` range (docs/diagnose.md); seed 1 as the other cases here.
+#[test]
+fn a_bent_sensor_is_a_quadratic_on_the_output() {
+    for c in [0.3, -0.3] {
+        let mut r = bent(run(PhysicalCase::Linear, 3000, 1).unwrap(), c);
+        r.s = nominal_simulation(&r.u, &r.y).unwrap();
+        let d = diagnose_record(&r);
+        let f = d.report.findings.iter().find(|f| f.physics != Physics::Unexplained);
+        let f = f.unwrap_or_else(|| panic!("bend {c}: no finding: {:?}", d.report.findings));
+        assert_eq!((f.physics, f.acts_on), (Physics::Quadratic, ActsOn::Output), "bend {c}: {}", f.summary);
+        assert_eq!(f.parameters["curvature"].signum(), c.signum(), "bend {c}: {}", f.summary);
+        let h = &d.report.holdout;
+        assert!(h.fit_after_pct["y1"] > h.fit_before_pct["y1"], "bend {c}: {h:?}");
+    }
 }
 
 /// A linear plant: no nonlinear class is named (a linear change may be, when the re-fit earns

@@ -9,11 +9,15 @@
 //! result holds beyond it: `NOMINAL=na,nb,nk`, the user's nominal an ARX of other orders (a
 //! first-order lag is `1,1,1`), and `WHITE=share`, white Gaussian measurement noise added at
 //! that share of the plant output's variance (seeded by the case's seed) before the nominal is
-//! fitted.
+//! fitted. A third, `SENSOR=top`, reads the linear plant (only that case runs) through a
+//! sensor bent by a square law, `x + c·(x − m)²/sd` with `m` and `sd` the plant output's mean
+//! and standard deviation and `|c|` drawn in 0.1..`top` with either sign (seeded by the case's
+//! seed); right is then `quadratic` on the output.
 
 use mpmwatch_core::detect::Signal;
-use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
+use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
 use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, nominal_simulation_of, run};
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::SeedableRng;
 
@@ -39,19 +43,18 @@ pub(crate) fn diagnose_against(r: &PhysicalRecord, s: &[f64]) -> Diagnosis {
 /// held-out FIT before and after.
 struct Outcome {
     physics: &'static str,
+    /// Whether the named element acts on the output (a sensor).
+    on_output: bool,
     before: f64,
     after: f64,
 }
 
 fn outcome(d: &Diagnosis) -> Outcome {
-    let physics = d
-        .report
-        .findings
-        .iter()
-        .find(|f| f.physics != Physics::Unexplained)
-        .map_or("none", |f| f.physics.name());
+    let named = d.report.findings.iter().find(|f| f.physics != Physics::Unexplained);
+    let physics = named.map_or("none", |f| f.physics.name());
+    let on_output = named.is_some_and(|f| f.acts_on == ActsOn::Output);
     let h = &d.report.holdout;
-    Outcome { physics, before: h.fit_before_pct["y1"], after: h.fit_after_pct["y1"] }
+    Outcome { physics, on_output, before: h.fit_before_pct["y1"], after: h.fit_after_pct["y1"] }
 }
 
 /// Right: a nonlinear case named by an accepted class; a linear plant with no finding or a
@@ -72,6 +75,26 @@ fn seeds_and_length(default_n: usize) -> (u64, u64, usize) {
     (a.parse().expect("SEEDS=a..b"), b.parse().expect("SEEDS=a..b"), n)
 }
 
+/// `r` read through a sensor bent by a square law, `x + c·(x − m)²/sd` with `m` and `sd` the
+/// plant output's mean and standard deviation: the plant's own output becomes the reading and
+/// the recorded output keeps its noise. The nominal is left as it was, for the caller to refit.
+pub(crate) fn bent(mut r: PhysicalRecord, c: f64) -> PhysicalRecord {
+    let m = r.plant.iter().sum::<f64>() / r.plant.len() as f64;
+    let sd = (r.plant.iter().map(|v| (v - m).powi(2)).sum::<f64>() / r.plant.len() as f64).sqrt();
+    for (y, x) in r.y.iter_mut().zip(r.plant.iter_mut()) {
+        let read = *x + c * (*x - m).powi(2) / sd;
+        *y += read - *x;
+        *x = read;
+    }
+    r.description += &format!("; read through a sensor bent by {c:+.2} std at one std");
+    r
+}
+
+/// The `SENSOR` shift's largest curvature, when it is set.
+fn sensor() -> Option<f64> {
+    std::env::var("SENSOR").ok().map(|v| v.parse().expect("SENSOR=curvature"))
+}
+
 /// `r` under the study's shifts (`NOMINAL`, `WHITE`; the module's doc), unchanged without them.
 fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
@@ -90,7 +113,15 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
         r.noise_share += share;
         r.description += &format!("; white noise {:.0} % of the plant's variance added", 100.0 * share);
     }
-    if white.is_some() || orders.is_some() {
+    if let Some(top) = sensor() {
+        // A curvature of 0.1 to `top` standard deviations at one standard deviation, either
+        // way, drawn from its own stream of the case's seed.
+        let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x0005_E750_0000);
+        let c = (0.1 + (top - 0.1).max(0.0) * rng.random::<f64>())
+            * if rng.random::<bool>() { 1.0 } else { -1.0 };
+        r = bent(r, c);
+    }
+    if white.is_some() || orders.is_some() || sensor().is_some() {
         let o = orders.unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
         if orders.is_some() {
             r.description += &format!("; nominal ARX [{} {} {}]", o.0, o.1, o.2);
@@ -107,7 +138,9 @@ fn study() {
     let only = std::env::var("CASE").ok();
     let (mut right, mut total, mut worse) = (0, 0, 0);
     for case in PhysicalCase::ALL {
-        if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str())) {
+        if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str()))
+            || (sensor().is_some() && case != PhysicalCase::Linear)
+        {
             continue;
         }
         let mut case_right = 0;
@@ -115,7 +148,11 @@ fn study() {
             let r = shifted(run(case, n, seed).unwrap());
             let d = diagnose_record(&r);
             let o = outcome(&d);
-            let ok = is_right(case, o.physics);
+            let ok = if sensor().is_some() {
+                o.physics == "quadratic" && o.on_output
+            } else {
+                is_right(case, o.physics)
+            };
             let fell = o.physics != "none" && o.after < o.before;
             total += 1;
             right += usize::from(ok);
@@ -142,7 +179,7 @@ fn study() {
                 "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} | {} | tried {:?} | beyond {:?}",
                 case.name(),
                 if ok { "ok" } else { "NO" },
-                o.physics,
+                if o.on_output { format!("{} (output)", o.physics) } else { o.physics.to_string() },
                 o.before,
                 o.after,
                 if fell { " FELL" } else { "" },
