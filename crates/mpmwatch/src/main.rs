@@ -98,16 +98,16 @@ enum Verb {
     /// residuals, on the training part, says which input→output channels are wrong. (2) Name.
     /// Open loop (no --excitations): each output is explained by grey-box structures, the
     /// nominal's linear dynamics re-estimated together with one physics element (dead zone,
-    /// saturation, polynomial, backlash on an input; |x| sensor or clip on the output; Coulomb
-    /// friction or a cubic spring fed back), fitted by simulation error; a linear re-fit always
-    /// competes. Closed loop: on each flagged channel every candidate physics (gain,
-    /// time_constant, dead_time, missing_coupling, dead_zone, saturation, quadratic, cubic,
-    /// bilinear, backlash, coulomb_friction, abs_sensor) is fitted as a correction, instrumented
-    /// by the dither-driven part of the inputs, and scored by one-step prediction error under a
-    /// noise model. Both choose by blocked cross-validation inside the training part with a
-    /// parsimony penalty. (3) Gate: a finding is reported only when its correction raises the
-    /// FIT on held-back training data by --min-gain points; otherwise `unexplained`, naming the
-    /// best candidate and its gain. (4) Prove: FIT% before → after on the last
+    /// saturation, polynomial, backlash on an input; |x| sensor, clip or square-law bend on the
+    /// output; Coulomb friction or a cubic spring fed back), fitted by simulation error; a
+    /// linear re-fit always competes. Closed loop: on each flagged channel every candidate
+    /// physics (gain, time_constant, dead_time, missing_coupling, dead_zone, saturation,
+    /// quadratic, cubic, bilinear, backlash, coulomb_friction, abs_sensor) is fitted as a
+    /// correction, instrumented by the dither-driven part of the inputs, and scored by one-step
+    /// prediction error under a noise model. Both choose by blocked cross-validation inside the
+    /// training part with a parsimony penalty. (3) Gate: a finding is reported only when its
+    /// correction raises the FIT on held-back training data by --min-gain points; otherwise
+    /// `unexplained`, naming the best candidate and its gain. (4) Prove: FIT% before → after on the last
     /// --holdout-fraction of the record, which no step above has seen; where that tail leaves
     /// the range the training part visited, the report says so (`holdout.beyond_training`), and
     /// a correction is extrapolated there.

@@ -13,9 +13,11 @@ use crate::candidates::{ActsOn, Physics};
 
 /// Parameters `[m, sd, lo, hi, c]`: the output's training median, standard deviation and
 /// range (kept by the fit, [`Element::fixed`]), and the curvature `c`, the bend at one standard
-/// deviation from the median in standard deviations. Beyond the training range the bend holds
-/// its edge value (as [`super::polynomial::Polynomial`]'s powers do): a curve fitted on a
-/// range is not known outside it.
+/// deviation from the median in standard deviations. Where the true value leaves the range
+/// the readings visited in training, the bend holds its edge value (as
+/// [`super::polynomial::Polynomial`]'s powers do): a curve fitted on a range is not known
+/// outside it. A bend above about 0.25 puts the parabola's vertex within two standard
+/// deviations, a reading that turns back: the fit allows it and the description says so.
 pub struct SensorPolynomial;
 
 /// Curvatures the fit starts from: a bend of a fifth of a standard deviation at one standard
@@ -69,9 +71,19 @@ impl Element for SensorPolynomial {
         Some(self.output(p, v))
     }
     fn describe(&self, p: &[f64], _input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
+        // The parabola's vertex, where the reading turns back.
+        let vertex = p[0] - p[1] / (2.0 * p[4]);
+        let turns = if (p[2]..=p[3]).contains(&vertex) {
+            format!(
+                "; the curve turns back at a true value of {}, within the range the readings visit, so readings near it are ambiguous",
+                num(vertex)
+            )
+        } else {
+            String::new()
+        };
         (
             format!(
-                "{output}'s sensor reads through a curved characteristic: x + {}·(x − {})²/{} (a square-law bend of {} standard deviations at one standard deviation from the median)",
+                "{output}'s sensor reads through a curved characteristic: x + {}·(x − {})²/{} (a square-law bend of {} standard deviations at one standard deviation from the median){turns}",
                 num(p[4]),
                 num(p[0]),
                 num(p[1]),
@@ -86,6 +98,16 @@ impl Element for SensorPolynomial {
 mod tests {
     use super::super::{Model, Orders, fit};
     use super::*;
+
+    /// The description says where the curve turns back when that lies in the readings' range
+    /// (vertex `m − sd/(2c)`: −0.9 for a bend of 0.5 about 0.1 with unit scale), not otherwise.
+    #[test]
+    fn the_description_says_where_the_reading_turns_back() {
+        let (text, _) = SensorPolynomial.describe(&[0.1, 1.0, -2.0, 2.0, 0.5], "u", "y");
+        assert!(text.contains("turns back at a true value of -0.9000,"), "{text}");
+        let (text, _) = SensorPolynomial.describe(&[0.1, 1.0, -2.0, 2.0, 0.1], "u", "y");
+        assert!(!text.contains("turns back"), "{text}");
+    }
 
     /// The stand-in inverts the curve inside the training range, to rounding.
     #[test]
