@@ -20,15 +20,13 @@
 //!
 //! A named element must also act: an element with a kink (a limit, a dead zone) whose fitted
 //! kink lies where the record hardly goes, on fewer than [`MIN_ACTING`] of the training rows,
-//! is its linear part under a nonlinear name, and is withheld.
+//! is its linear part under a nonlinear name, and the linear re-fit is tried in its place.
 //!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
-//! An idle element gives way to the next by the same rule (the walk down the ranking), its
-//! score joining the linear standard the next must beat by [`NONLINEAR_MARGIN`]: two elements
-//! can differ only in whether their nonlinearity acts where the record goes (an actuator limit
-//! on the present input, the cap of a store that fills), so the first may be idle where the
-//! second is not. A slow element ends the walk, and the linear re-fit is tried. When nothing
-//! is reported, the finding is `unexplained` and says why, the first few in the order tried.
+//! Only that one is tried: an element ranked below an idle one does not beat the idle one's
+//! linear part by [`NONLINEAR_MARGIN`], since the margin is wider than the parsimony's window.
+//! When nothing is reported, the finding is `unexplained` and says why, each withheld
+//! correction in the order tried.
 //!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
@@ -129,7 +127,7 @@ pub fn explain(
         }
     }
     let mut tried: Vec<Tried> = Vec::new();
-    let mut scored: Vec<(CvScore, usize, usize, usize, usize)> = Vec::new();
+    let mut scored: Vec<Scored> = Vec::new();
     let els = elements();
     for (o, orders) in order_sets.iter().enumerate() {
         for (k, el) in els.iter().enumerate() {
@@ -170,41 +168,42 @@ pub fn explain(
         let r = m.slowest_pole(f);
         if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() }
     };
-    // The walk down the ranking: the parsimony rule picks among the candidates left, and an
-    // idle element gives way to the next. It is its linear part under a nonlinear name, so its
-    // score joins the linear standard the next one must beat by the margin. A slow one ends
-    // the walk: the record then has a slow mode the blocks cannot check, and a faster element
-    // ranked below it settles by leaving that mode out (a tank's walk reached a friction that
-    // fell on the tail, docs/diagnose-history.md, stop 47).
-    let mut left: Vec<&(CvScore, usize, usize, usize, usize)> = scored.iter().collect();
-    let mut standard = linear_cv;
-    while let Some(pos) = chosen(&left, &rank) {
-        let (v, k, i, _, o) = left.swap_remove(pos);
-        if rank(v) - standard < NONLINEAR_MARGIN || !passes(v) {
-            break;
-        }
+    if let Some((v, k, i, _, o)) = chosen(&scored, &rank)
+        && rank(v) - linear_cv >= NONLINEAR_MARGIN
+        && passes(v)
+    {
         let (k, i, o) = (*k, *i, *o);
         let el = els[k].as_ref();
         let m = Model { element: el, input: i, orders: order_sets[o].clone() };
-        let Some(f) = fit(&m, d, &train_rows) else { continue };
-        let tau = time_constant(&m, &f);
-        if tau >= block {
-            withheld.push(held(el.physics(), Why::Slow(tau), v));
-            break;
+        if let Some(f) = fit(&m, d, &train_rows) {
+            let tau = time_constant(&m, &f);
+            let settles = tau < block;
+            if !settles {
+                withheld.push(held(el.physics(), Why::Slow(tau), v));
+            } else if let Some(sim) = m.simulate(&f, &d.u, d.y) {
+                let share = m.acting_share(&f, &d.u, &sim, &train_rows);
+                match share.filter(|&s| s.is_nan() || s < MIN_ACTING) {
+                    Some(share) => withheld.push(held(el.physics(), Why::Idle(share), v)),
+                    None => {
+                        let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+                        return Explanation {
+                            finding: finding(
+                                names,
+                                i,
+                                el.physics(),
+                                el.acts_on(),
+                                summary,
+                                parameters,
+                                tried,
+                            ),
+                            corrected: Some(sim),
+                            curve: m.curve(&f, d, names.inputs[i], names.output),
+                            withheld: false,
+                        };
+                    }
+                }
+            }
         }
-        let Some(sim) = m.simulate(&f, &d.u, d.y) else { continue };
-        if let Some(share) = m.acting_share(&f, &d.u, &sim, &train_rows).filter(|s| *s < MIN_ACTING) {
-            withheld.push(held(el.physics(), Why::Idle(share), v));
-            standard = standard.max(rank(v));
-            continue;
-        }
-        let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
-        return Explanation {
-            finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried),
-            corrected: Some(sim),
-            curve: m.curve(&f, d, names.inputs[i], names.output),
-            withheld: false,
-        };
     }
     if let Some((orders, v)) = &linear
         && passes(v)
@@ -212,7 +211,8 @@ pub fn explain(
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
         if let Some(f) = fit(&m, d, &train_rows) {
             let tau = time_constant(&m, &f);
-            if tau >= block {
+            let settles = tau < block;
+            if !settles {
                 withheld.push(held(Physics::Unexplained, Why::Slow(tau), v));
             } else if let Some(sim) = m.simulate(&f, &d.u, d.y) {
                 let i = flagged.first().copied().unwrap_or(0);
@@ -245,7 +245,7 @@ pub fn explain(
                 first.why.text(block),
                 first.why.advice(block, d.y.len()),
             );
-            for w in next.iter().take(MAX_WITHHELD_TOLD - 1) {
+            for w in next {
                 text += &format!(
                     "; the next, {} ({:+.1} points), is not reported either: {}{}",
                     w.name(),
@@ -253,9 +253,6 @@ pub fn explain(
                     w.why.text(block),
                     w.why.advice(block, d.y.len())
                 );
-            }
-            if next.len() >= MAX_WITHHELD_TOLD {
-                text += &format!("; {} more were not reported either", next.len() + 1 - MAX_WITHHELD_TOLD);
             }
             if matches!(first.why, Why::Idle(_)) && !next.iter().any(|w| w.physics == Physics::Unexplained) {
                 text += "; no re-fitted linear model is reported in its place";
@@ -282,9 +279,6 @@ pub fn explain(
         withheld,
     }
 }
-
-/// How many withheld corrections an `unexplained` finding describes one by one.
-const MAX_WITHHELD_TOLD: usize = 3;
 
 /// A correction that passed the gate against the nominal and was not reported.
 struct Withheld {
@@ -328,7 +322,7 @@ impl Why {
                 block,
             ),
             Why::Idle(share) => format!(
-                "its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %), so its gain is its linear part's",
+                "its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %): its gain is its linear part's",
                 100.0 * share,
                 100.0 * MIN_ACTING,
             ),
@@ -336,16 +330,18 @@ impl Why {
     }
 }
 
-/// The parsimony rule over the candidates `left`: among those within [`PARSIMONY`] points of
-/// the best by `rank`, the one with the fewest parameters (the better ranked on a tie); its
-/// position in `left`.
-fn chosen(left: &[&(CvScore, usize, usize, usize, usize)], rank: &impl Fn(&CvScore) -> f64) -> Option<usize> {
-    let best = left.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
-    left.iter()
-        .enumerate()
-        .filter(|(_, s)| rank(&s.0) >= best - PARSIMONY)
-        .min_by(|(_, a), (_, b)| a.3.cmp(&b.3).then(rank(&b.0).total_cmp(&rank(&a.0))))
-        .map(|(p, _)| p)
+/// A scored candidate: its cross-validated score, the element's index in [`elements`], the
+/// input it acts on, its parameter count and the index of its linear orders.
+type Scored = (CvScore, usize, usize, usize, usize);
+
+/// The parsimony rule: among the candidates within [`PARSIMONY`] points of the best by `rank`,
+/// the one with the fewest parameters (the better ranked on a tie).
+fn chosen<'a>(scored: &'a [Scored], rank: &impl Fn(&CvScore) -> f64) -> Option<&'a Scored> {
+    let best = scored.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
+    scored
+        .iter()
+        .filter(|s| rank(&s.0) >= best - PARSIMONY)
+        .min_by(|a, b| a.3.cmp(&b.3).then(rank(&b.0).total_cmp(&rank(&a.0))))
 }
 
 /// The advice beside a correction withheld as slower than a validation block: the record
@@ -661,27 +657,21 @@ mod tests {
         assert!((advised - stated * 1500.0 / 350.0).abs() <= 2.0, "{}", slow.summary);
     }
 
-    /// The parsimony rule and the walk down the ranking it serves: among candidates within
-    /// half a point of the best, the fewest parameters win; on equal counts the better score;
-    /// a candidate taken out hands the choice to the rule over those left.
+    /// The parsimony rule: among candidates within half a point of the best, the fewest
+    /// parameters win, and on equal counts the better score.
     #[test]
     fn the_parsimony_rule_takes_the_simplest_within_half_a_point() {
         let c = |mean: f64, complexity: usize| {
             (CvScore { mean, blocks: vec![mean], prediction_rms: vec![] }, 0, 0, complexity, 0)
         };
-        let (a, b, b2, e) = (c(50.0, 9), c(49.7, 7), c(49.6, 7), c(49.4, 5));
         let rank = |v: &CvScore| v.mean;
-        let mut left = vec![&a, &b, &b2, &e];
-        // `e` is simplest but 0.6 below the best; `b` and `b2` tie on parameters.
-        assert_eq!(chosen(&left, &rank), Some(1));
-        left.swap_remove(1);
-        assert_eq!(chosen(&left, &rank).map(|p| left[p].0.mean), Some(49.6));
-        left.retain(|s| s.0.mean != 49.6);
-        assert_eq!(chosen(&left, &rank).map(|p| left[p].0.mean), Some(50.0));
-        // Without the best, `e` is within half a point of what is left and simplest.
-        left.retain(|s| s.0.mean != 50.0);
-        assert_eq!(chosen(&left, &rank).map(|p| left[p].0.mean), Some(49.4));
-        assert_eq!(chosen(&[], &rank), None);
+        let mean_of = |s: &[Scored]| chosen(s, &rank).map(|s| s.0.mean);
+        // 49.4 is simplest but 0.6 below the best; 49.7 and 49.6 tie on parameters.
+        assert_eq!(mean_of(&[c(50.0, 9), c(49.7, 7), c(49.6, 7), c(49.4, 5)]), Some(49.7));
+        // Within half a point, the simplest wins over the best.
+        assert_eq!(mean_of(&[c(50.0, 9), c(49.6, 7), c(49.5, 5)]), Some(49.5));
+        assert_eq!(mean_of(&[c(50.0, 9)]), Some(50.0));
+        assert_eq!(mean_of(&[]), None);
     }
 
     #[test]
