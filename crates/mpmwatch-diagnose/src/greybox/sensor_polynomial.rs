@@ -83,9 +83,11 @@ impl Element for SensorPolynomial {
         };
         (
             format!(
-                "{output}'s sensor reads through a curved characteristic: x + {}·(x − {})²/{} (a square-law bend of {} standard deviations at one standard deviation from the median){turns}",
-                num(p[4]),
-                num(p[0]),
+                "{output}'s sensor reads through a curved characteristic: x {} {}·(x {} {})²/{} (a square-law bend of {} standard deviations at one standard deviation from the median){turns}",
+                if p[4] < 0.0 { "−" } else { "+" },
+                num(p[4].abs()),
+                if p[0] < 0.0 { "+" } else { "−" },
+                num(p[0].abs()),
                 num(p[1]),
                 num(p[4])
             ),
@@ -100,13 +102,18 @@ mod tests {
     use super::*;
 
     /// The description says where the curve turns back when that lies in the readings' range
-    /// (vertex `m − sd/(2c)`: −0.9 for a bend of 0.5 about 0.1 with unit scale), not otherwise.
+    /// (vertex `m − sd/(2c)`: −0.9 for a bend of 0.5 about 0.1 with unit scale), not otherwise;
+    /// signs are written out, not as `+ -`.
     #[test]
     fn the_description_says_where_the_reading_turns_back() {
         let (text, _) = SensorPolynomial.describe(&[0.1, 1.0, -2.0, 2.0, 0.5], "u", "y");
         assert!(text.contains("turns back at a true value of -0.9000,"), "{text}");
-        let (text, _) = SensorPolynomial.describe(&[0.1, 1.0, -2.0, 2.0, 0.1], "u", "y");
+        assert!(text.contains("x + 0.5000·(x − 0.1000)²/1.000"), "{text}");
+        let (text, _) = SensorPolynomial.describe(&[0.1, 1.0, -2.0, 2.0, -0.1], "u", "y");
         assert!(!text.contains("turns back"), "{text}");
+        assert!(text.contains("x − 0.1000·(x − 0.1000)²/1.000"), "{text}");
+        let (text, _) = SensorPolynomial.describe(&[-0.1, 1.0, -2.0, 2.0, 0.1], "u", "y");
+        assert!(text.contains("x + 0.1000·(x + 0.1000)²/1.000"), "{text}");
     }
 
     /// The stand-in inverts the curve inside the training range, to rounding.
