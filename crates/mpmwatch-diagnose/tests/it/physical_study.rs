@@ -15,6 +15,7 @@
 //! seed); right is then `quadratic` on the output.
 
 use mpmwatch_core::detect::Signal;
+use mpmwatch_core::numerics::{mean, std_dev};
 use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
 use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, nominal_simulation_of, run};
 use rand::Rng;
@@ -79,8 +80,7 @@ fn seeds_and_length(default_n: usize) -> (u64, u64, usize) {
 /// plant output's mean and standard deviation: the plant's own output becomes the reading and
 /// the recorded output keeps its noise. The nominal is left as it was, for the caller to refit.
 pub(crate) fn bent(mut r: PhysicalRecord, c: f64) -> PhysicalRecord {
-    let m = r.plant.iter().sum::<f64>() / r.plant.len() as f64;
-    let sd = (r.plant.iter().map(|v| (v - m).powi(2)).sum::<f64>() / r.plant.len() as f64).sqrt();
+    let (m, sd) = (mean(&r.plant), std_dev(&r.plant, 0));
     for (y, x) in r.y.iter_mut().zip(r.plant.iter_mut()) {
         let read = *x + c * (*x - m).powi(2) / sd;
         *y += read - *x;
@@ -95,7 +95,8 @@ fn sensor() -> Option<f64> {
     std::env::var("SENSOR").ok().map(|v| v.parse().expect("SENSOR=curvature"))
 }
 
-/// `r` under the study's shifts (`NOMINAL`, `WHITE`; the module's doc), unchanged without them.
+/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`; the module's doc), unchanged
+/// without them.
 fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
     let orders = std::env::var("NOMINAL").ok().map(|v| {
@@ -104,7 +105,7 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
         (o[0], o[1], o[2])
     });
     if let Some(share) = white {
-        let m = r.plant.iter().sum::<f64>() / r.plant.len() as f64;
+        let m = mean(&r.plant);
         let var = r.plant.iter().map(|v| (v - m).powi(2)).sum::<f64>() / r.plant.len() as f64;
         // One stream per seed, the same for every class at that seed (the plants differ).
         let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x005E_ED0F_5EED);
