@@ -9,10 +9,9 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mpmwatch"))
 }
 
-fn scratch_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpmwatch-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A scratch directory, removed when the returned guard drops.
+fn scratch_dir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("mpmwatch-cli-{name}-")).tempdir().unwrap()
 }
 
 /// A record with a binary dither acting on the residual one sample later.
@@ -38,7 +37,8 @@ fn json_of(out: &std::process::Output) -> serde_json::Value {
 
 #[test]
 fn mi_prints_json_in_nats_and_bits() {
-    let dir = scratch_dir("mi");
+    let scratch = scratch_dir("mi");
+    let dir = scratch.path().to_path_buf();
     let file = write_record(&dir);
     let nats = json_of(
         &bin()
@@ -74,7 +74,8 @@ fn mi_prints_json_in_nats_and_bits() {
 
 #[test]
 fn mi_with_surrogates_reports_threshold_and_seed() {
-    let dir = scratch_dir("sur");
+    let scratch = scratch_dir("sur");
+    let dir = scratch.path().to_path_buf();
     let file = write_record(&dir);
     let args = ["--x", "ud1", "--y", "e1", "--lag", "1", "--surrogates", "30", "--seed", "5", "--json"];
     let out = json_of(&bin().args(["mi"]).arg(&file).args(args).output().unwrap());
@@ -87,7 +88,8 @@ fn mi_with_surrogates_reports_threshold_and_seed() {
 
 #[test]
 fn bad_input_exits_nonzero_with_a_message_naming_it() {
-    let dir = scratch_dir("bad");
+    let scratch = scratch_dir("bad");
+    let dir = scratch.path().to_path_buf();
     let file = write_record(&dir);
     let out = bin().args(["mi"]).arg(&file).args(["--x", "ud9", "--y", "e1"]).output().unwrap();
     assert!(!out.status.success());
@@ -123,7 +125,8 @@ fn bench_json_has_the_contract_keys() {
 
 #[test]
 fn analyze_prints_json_verdicts_and_writes_figures() {
-    let dir = scratch_dir("analyze");
+    let scratch = scratch_dir("analyze");
+    let dir = scratch.path().to_path_buf();
     let file = write_record(&dir);
     let figs = dir.join("figs");
     let out = json_of(

@@ -25,10 +25,9 @@ fn spec(effect: Effect, excitation: Excitation, seed: u64) -> ScenarioSpec {
     }
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpmwatch_diag_{}_{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A scratch directory, removed when the returned guard drops.
+fn tmp(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("mpmwatch_diag_{name}_")).tempdir().unwrap()
 }
 
 fn write_csv(path: &PathBuf, names: &[&str], cols: &[&[f64]]) {
@@ -82,7 +81,8 @@ fn disturbance_only_change_yields_no_finding() {
 #[test]
 fn report_json_matches_design_4_5() {
     let rec = run(&spec(Effect::DeadTime, Excitation::Prbs, 7)).unwrap();
-    let dir = tmp("json");
+    let scratch = tmp("json");
+    let dir = scratch.path().to_path_buf();
     let out = diagnose_cli(&dir, &rec.u[0], &rec.d[0], &rec.y[0], &rec.s[0]);
     let (rep, cor) = (dir.join("r.json"), dir.join("c.csv"));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -142,7 +142,8 @@ fn a_tail_beyond_the_training_range_is_reported() {
     let (mut u, mut d) = (rec.u[0].clone(), rec.d[0].clone());
     u[1400..].iter_mut().for_each(|v| *v *= 2.0);
     d[1400..].iter_mut().for_each(|v| *v *= 2.0);
-    let dir = tmp("beyond");
+    let scratch = tmp("beyond");
+    let dir = scratch.path().to_path_buf();
     let out = diagnose_cli(&dir, &u, &d, &rec.y[0], &rec.s[0]);
     let rep = dir.join("r.json");
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -160,7 +161,8 @@ fn a_tail_beyond_the_training_range_is_reported() {
 
 #[test]
 fn bad_input_names_the_culprit() {
-    let dir = tmp("bad");
+    let scratch = tmp("bad");
+    let dir = scratch.path().to_path_buf();
     let x: Vec<f64> = (0..400).map(|k| (k as f64 * 0.3).sin()).collect();
     let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
     write_csv(&recp, &["u1", "y1"], &[&x, &x]);
@@ -219,7 +221,8 @@ fn bad_input_names_the_culprit() {
 fn open_loop_dead_zone_is_named_and_its_element_drawn() {
     use mpmwatch_sim::physical_cases::{PhysicalCase, run as run_case};
     let r = run_case(PhysicalCase::ActuatorDeadZone, 3000, 1).unwrap();
-    let dir = tmp("element");
+    let scratch = tmp("element");
+    let dir = scratch.path().to_path_buf();
     let (recp, simp) = (dir.join("rec.csv"), dir.join("sim.csv"));
     write_csv(&recp, &["u1", "y1"], &[&r.u, &r.y]);
     write_csv(&simp, &["y1"], &[&r.s]);
