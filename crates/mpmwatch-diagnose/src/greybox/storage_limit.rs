@@ -15,8 +15,10 @@ use crate::candidates::{ActsOn, Physics};
 /// the first input), parameters `[a, lo, hi]`; a limit outside the store's range is inactive.
 pub struct StorageLimit;
 
-/// Poles of the store tried as starts: from a few samples to about fifty.
-const POLES: [f64; 3] = [0.8, 0.93, 0.98];
+/// Poles of the store tried as starts: from a few samples to about two hundred. A limit
+/// placed on a faster store's range than the fit ends on can lie beyond the slower store's,
+/// where it binds on no row and has no gradient to come back by.
+const POLES: [f64; 4] = [0.8, 0.93, 0.98, 0.995];
 
 fn store(u: &[f64], a: f64, lo: f64, hi: f64) -> Vec<f64> {
     let mut s = u.first().copied().unwrap_or(0.0);
