@@ -48,11 +48,11 @@ use crate::report::{Finding, Tried};
 
 /// Points of cross-validated FIT a physics element must gain over the re-fitted linear model:
 /// an element nests the linear model, so on a linear plant it gains only by fitting noise.
-/// On 75 development linear plants at 3000 samples (as generated, with white noise added,
-/// under nominals of other orders) that gain stayed within 0.14 points either way, at 1500
-/// samples within 0.6; half a point is over three times the first and below the gain of a
-/// weak V² or cubic that a re-fitted linear model nearly matches. Strongly coloured noise has
-/// a longer tail: one fresh linear plant gained 1.3 (docs/diagnose-history.md, stop 48).
+/// On 90 development records of linear plants at 3000 samples (as generated, with white
+/// noise added, under nominals of other orders) the best element gained at most 0.14 points,
+/// on 15 at 1500 samples 0.33; half a point is over three times the first and below the gain
+/// of a weak V² or cubic that a re-fitted linear model nearly matches. Strongly coloured noise
+/// has a longer tail: one fresh linear plant gained 1.3 (docs/diagnose-history.md, stop 48).
 pub const NONLINEAR_MARGIN: f64 = 0.5;
 
 /// The share of its final value a step response must pass to have moved. A re-fit from noisy
