@@ -23,10 +23,10 @@
 //! is its linear part under a nonlinear name, and the linear re-fit is tried in its place.
 //!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
-//! Only that one is tried. When it is idle, another element of the window beats its linear
-//! part by at most the window plus what the idle one gained by fitting noise, about the
-//! margin: a walk on to the next element (stop 47, built when the margin was a point and the
-//! walk could not act) is not part of the rule.
+//! Only that one is tried. When it is idle, another element of the window can beat its
+//! linear part by up to about the margin (the window plus what the idle one gained by fitting
+//! noise); trying the next one is not part of the rule (docs/diagnose-history.md, stops 47
+//! and 48).
 //! When nothing is reported, the finding is `unexplained` and says why, each withheld
 //! correction in the order tried.
 //!
