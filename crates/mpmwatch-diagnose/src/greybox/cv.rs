@@ -143,7 +143,8 @@ pub fn linear_orders(
     // Every dead time is scored on the same rows: from the folds' first row (after the
     // warm-up) and past the longest dead time's initial rows, which a simulation copies from
     // the record (zero error there would favour the longer dead times).
-    let first = folds.first().map_or(d.train.start, |f| f.1.start).max(d.train.start + MAX_DEAD_TIME + 2);
+    let longest = max_dead_time(folds);
+    let first = folds.first().map_or(d.train.start, |f| f.1.start).max(d.train.start + longest + 2);
     let rows: Vec<usize> = (first..d.train.end).collect();
     let mut nk = vec![1usize; d.u.len()];
     let sim_err = |orders: &Orders| -> f64 {
@@ -157,16 +158,21 @@ pub fn linear_orders(
         )
     };
     for i in 0..d.u.len() {
-        let mut best = (f64::INFINITY, 1);
-        for k in 0..=MAX_DEAD_TIME {
-            let mut o = Orders { na: 2, nb: 2, nk: nk.clone() };
-            o.nk[i] = k;
-            let e = sim_err(&o);
-            if e < best.0 {
-                best = (e, k);
-            }
-        }
-        nk[i] = best.1;
+        let mut tried: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+        let mut error_at = |k: usize, nk: &[usize]| -> f64 {
+            *tried.entry(k).or_insert_with(|| {
+                let mut o = Orders { na: 2, nb: 2, nk: nk.to_vec() };
+                o.nk[i] = k;
+                sim_err(&o)
+            })
+        };
+        let grid = dead_time_grid(longest);
+        let errors: Vec<f64> = grid.iter().map(|&k| error_at(k, &nk)).collect();
+        let at = (0..grid.len()).min_by(|&a, &b| errors[a].total_cmp(&errors[b])).unwrap_or(0);
+        // Between the best grid point's neighbours every dead time is tried.
+        let (lo, hi) = (grid[at.saturating_sub(1)], grid[(at + 1).min(grid.len() - 1)]);
+        let best = (lo..=hi).min_by(|&a, &b| error_at(a, &nk).total_cmp(&error_at(b, &nk))).unwrap_or(1);
+        nk[i] = best;
     }
     let mut best: Option<(Orders, CvScore)> = None;
     for na in 1..=3 {
@@ -184,12 +190,62 @@ pub fn linear_orders(
     best
 }
 
-/// Longest dead time searched, samples.
-pub const MAX_DEAD_TIME: usize = 20;
+/// `folds` with every validation block starting at `start` or later (a block that would be
+/// empty is dropped); the fit rows are kept.
+pub fn starting_at(
+    folds: &[(Vec<usize>, std::ops::Range<usize>)],
+    start: usize,
+) -> Vec<(Vec<usize>, std::ops::Range<usize>)> {
+    folds
+        .iter()
+        .map(|(fit, b)| (fit.clone(), b.start.max(start)..b.end))
+        .filter(|(_, b)| !b.is_empty())
+        .collect()
+}
+
+/// Dead times up to this many samples are always searched, each one.
+pub const DEAD_TIME_FLOOR: usize = 20;
+
+/// The longest dead time searched, in samples: a quarter of the shortest validation block, and
+/// at least [`DEAD_TIME_FLOOR`]. A record sampled fast against its plant carries dead times of
+/// tens or hundreds of samples (a process logged every second), which a fixed bound would
+/// replace by a nonlinear element's best imitation; a quarter of a block still leaves each
+/// block three quarters of its rows driven by its own inputs.
+pub fn max_dead_time(folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> usize {
+    let block = folds.iter().map(|f| f.1.len()).min().unwrap_or(0);
+    (block / 4).max(DEAD_TIME_FLOOR)
+}
+
+/// The dead times the search scores first: each one up to [`DEAD_TIME_FLOOR`], then steps of a
+/// tenth of the dead time up to `longest` (included). Between the best of them and its
+/// neighbours every dead time is then scored ([`linear_orders`]): a response's error grows
+/// smoothly as its start moves off the record's by a tenth.
+fn dead_time_grid(longest: usize) -> Vec<usize> {
+    let mut grid: Vec<usize> = (0..=DEAD_TIME_FLOOR.min(longest)).collect();
+    let mut k = DEAD_TIME_FLOOR;
+    while k < longest {
+        k = (k + k.div_ceil(10)).min(longest);
+        grid.push(k);
+    }
+    grid
+}
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every dead time to the floor, then steps of a tenth up to the longest, which is
+    /// included; the longest follows a quarter of the shortest block, never below the floor.
+    #[test]
+    fn the_dead_time_grid_widens_with_the_blocks() {
+        assert_eq!(dead_time_grid(20), (0..=20).collect::<Vec<_>>());
+        let g = dead_time_grid(100);
+        assert_eq!(&g[21..], &[22, 25, 28, 31, 35, 39, 43, 48, 53, 59, 65, 72, 80, 88, 97, 100]);
+        assert!(g.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= w[0].div_ceil(10).max(1)));
+        let folds = |len: usize| vec![(Vec::new(), 0..len), (Vec::new(), len..3 * len)];
+        assert_eq!(max_dead_time(&folds(693)), 173);
+        assert_eq!(max_dead_time(&folds(60)), DEAD_TIME_FLOOR);
+    }
 
     /// Each block is scored against its own mean: a simulation that only follows the blocks'
     /// levels earns FIT 0 on every block (pooled, it would earn the share of the variance the

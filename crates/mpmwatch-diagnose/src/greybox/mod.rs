@@ -306,6 +306,15 @@ pub struct Orders {
     pub nk: Vec<usize>,
 }
 
+impl Orders {
+    /// The first row at which every lag is inside the record: a simulation under these orders
+    /// predicts from it on, and returns the record's own rows before it ([`Model::simulate`]).
+    pub fn reach(&self) -> usize {
+        let nkmax = self.nk.iter().copied().max().unwrap_or(0);
+        self.na.max(nkmax + self.nb).max(2)
+    }
+}
+
 /// A fitted hypothesis: element parameters and the coefficients of the structure.
 #[derive(Debug, Clone)]
 pub struct Fitted {
@@ -381,12 +390,6 @@ impl Model<'_> {
         self.orders.na + signals * self.orders.nb + self.element.feedbacks() + 1
     }
 
-    /// The first row every lag is inside the record.
-    fn first_row(&self, nk: &[usize]) -> usize {
-        let nkmax = nk.iter().copied().max().unwrap_or(0);
-        self.orders.na.max(nkmax + self.orders.nb).max(2)
-    }
-
     /// Simulation of the output over the whole record, from the recorded output's first
     /// samples as initial conditions. `None` when it diverges.
     pub fn simulate(&self, f: &Fitted, u: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
@@ -397,7 +400,7 @@ impl Model<'_> {
         let (sig, nk) = self.signals(&f.p, u);
         let n = y.len();
         let o = &self.orders;
-        let first = self.first_row(&nk).min(n);
+        let first = self.orders.reach().min(n);
         let mut x: Vec<f64> = y[..first].to_vec();
         x.resize(n, 0.0);
         let scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -443,7 +446,7 @@ impl Model<'_> {
     fn equation_error(&self, p: &[f64], u: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Fitted> {
         let (sig, nk) = self.signals(p, u);
         let o = &self.orders;
-        let first = self.first_row(&nk);
+        let first = self.orders.reach();
         let n = y.len();
         let mut cols: Vec<Vec<f64>> = Vec::new();
         let lagged = |x: &[f64], k: usize| -> Vec<f64> {
@@ -562,7 +565,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
     ]
 }
 
-pub use cv::{CvScore, MAX_DEAD_TIME, cv_fit, linear_orders, nominal_cv_fit};
+pub use cv::{CvScore, cv_fit, linear_orders, max_dead_time, nominal_cv_fit, starting_at};
 pub use explain::{Explanation, Names, explain};
 pub use linear::Linear;
 pub use structure::{FittedGreyBox, GreyBox, Structure};

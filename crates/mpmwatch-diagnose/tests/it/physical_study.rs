@@ -12,7 +12,9 @@
 //! fitted. A third, `SENSOR=top`, reads the linear plant (only that case runs) through a
 //! sensor bent by a square law, `x + c·(x − m)²/sd` with `m` and `sd` the plant output's mean
 //! and standard deviation and `|c|` drawn in 0.1..`top` with either sign (seeded by the case's
-//! seed); right is then `quadratic` on the output.
+//! seed); right is then `quadratic` on the output. A fourth, `DELAY=lo,hi`, delays every
+//! plant's response by a transport delay drawn in `lo..=hi` samples (seeded by the case's seed)
+//! before the nominal is fitted: a record sampled fast against its dead time.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
@@ -95,8 +97,27 @@ fn sensor() -> Option<f64> {
     std::env::var("SENSOR").ok().map(|v| v.parse().expect("SENSOR=curvature"))
 }
 
-/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`; the module's doc), unchanged
-/// without them.
+/// `r` with the plant's response delayed by `d` samples: the input moved `d` samples earlier
+/// against the output, and the record `d` samples shorter.
+pub(crate) fn delayed(mut r: PhysicalRecord, d: usize) -> PhysicalRecord {
+    let n = r.y.len() - d;
+    r.u.drain(..d);
+    r.y.truncate(n);
+    r.plant.truncate(n);
+    r.description += &format!("; a transport delay of {d} samples added");
+    r
+}
+
+/// The `DELAY` shift's range, when it is set.
+fn delay() -> Option<(usize, usize)> {
+    std::env::var("DELAY").ok().map(|v| {
+        let (a, b) = v.split_once(',').expect("DELAY=lo,hi");
+        (a.trim().parse().expect("DELAY=lo,hi"), b.trim().parse().expect("DELAY=lo,hi"))
+    })
+}
+
+/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`, `DELAY`; the module's doc),
+/// unchanged without them.
 fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
     let orders = std::env::var("NOMINAL").ok().map(|v| {
@@ -122,7 +143,11 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
             * if rng.random::<bool>() { 1.0 } else { -1.0 };
         r = bent(r, c);
     }
-    if white.is_some() || orders.is_some() || sensor().is_some() {
+    if let Some((lo, hi)) = delay() {
+        let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x00DE_1A70_0000);
+        r = delayed(r, rng.random_range(lo..=hi));
+    }
+    if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() {
         let o = orders.unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
         if orders.is_some() {
             r.description += &format!("; nominal ARX [{} {} {}]", o.0, o.1, o.2);
