@@ -129,9 +129,11 @@ fn varies(y: &[f64]) -> bool {
 }
 
 /// The best linear orders by blocked cross-validation: dead times input by input, by the
-/// simulation error on the training rows (the same rows for every dead time; on a dithered
-/// record the one-step prediction error under the fit's noise model) of a [`fit`] at two poles
-/// and two taps, then poles and taps by cross-validation ([`CvScore::rank`] against `base`). The dead time is judged on
+/// simulation error on the training rows (the same rows for every dead time compared; on a
+/// dithered record the one-step prediction error under the fit's noise model) of a [`fit`] at
+/// two poles and two taps, then poles and taps by cross-validation ([`CvScore::rank`] against
+/// `base`). Every dead time up to [`DEAD_TIME_FLOOR`] is scored, and when the best is at the
+/// floor's edge, the grid of [`dead_time_grid`] on to [`max_dead_time`]. The dead time is judged on
 /// a fit by simulation error, not on the equation-error fit alone, which coloured noise and a
 /// slow pole bias (docs/diagnose-history.md, "The dead-time search of the linear re-fit").
 pub fn linear_orders(
@@ -140,16 +142,18 @@ pub fn linear_orders(
     base: &CvScore,
 ) -> Option<(Orders, CvScore)> {
     let lin = Linear;
-    // Every dead time is scored on the same rows: from the folds' first row (after the
-    // warm-up) and past the longest dead time's initial rows, which a simulation copies from
-    // the record (zero error there would favour the longer dead times).
     let longest = max_dead_time(folds);
-    let first = folds.first().map_or(d.train.start, |f| f.1.start).max(d.train.start + longest + 2);
-    let rows: Vec<usize> = (first..d.train.end).collect();
-    let mut nk = vec![1usize; d.u.len()];
-    let sim_err = |orders: &Orders| -> f64 {
+    // The dead times compared are scored on the same rows: from the folds' first row (after the
+    // warm-up) and past the longest one's initial rows, which a simulation copies from the
+    // record (zero error there would favour the longer dead times).
+    let rows_past = |k: usize| -> Vec<usize> {
+        let first = folds.first().map_or(d.train.start, |f| f.1.start).max(d.train.start + k + 2);
+        (first..d.train.end).collect()
+    };
+    let (near_rows, far_rows) = (rows_past(DEAD_TIME_FLOOR.min(longest)), rows_past(longest));
+    let sim_err = |orders: &Orders, rows: &[usize]| -> f64 {
         let m = Model { element: &lin, input: 0, orders: orders.clone() };
-        fit(&m, d, &rows).and_then(|f| m.simulate(&f, &d.u, d.y).map(|s| (f, s))).map_or(
+        fit(&m, d, rows).and_then(|f| m.simulate(&f, &d.u, d.y).map(|s| (f, s))).map_or(
             f64::INFINITY,
             |(f, s)| {
                 let e: Vec<f64> = s.iter().zip(d.y).map(|(a, b)| a - b).collect();
@@ -157,21 +161,34 @@ pub fn linear_orders(
             },
         )
     };
+    let mut nk = vec![1usize; d.u.len()];
     for i in 0..d.u.len() {
-        let mut tried: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
-        let mut error_at = |k: usize, nk: &[usize]| -> f64 {
-            *tried.entry(k).or_insert_with(|| {
-                let mut o = Orders { na: 2, nb: 2, nk: nk.to_vec() };
-                o.nk[i] = k;
-                sim_err(&o)
-            })
+        let error_at = |k: usize, nk: &[usize], rows: &[usize]| -> f64 {
+            let mut o = Orders { na: 2, nb: 2, nk: nk.to_vec() };
+            o.nk[i] = k;
+            sim_err(&o, rows)
         };
-        let grid = dead_time_grid(longest);
-        let errors: Vec<f64> = grid.iter().map(|&k| error_at(k, &nk)).collect();
-        let at = (0..grid.len()).min_by(|&a, &b| errors[a].total_cmp(&errors[b])).unwrap_or(0);
-        // Between the best grid point's neighbours every dead time is tried.
-        let (lo, hi) = (grid[at.saturating_sub(1)], grid[(at + 1).min(grid.len() - 1)]);
-        let best = (lo..=hi).min_by(|&a, &b| error_at(a, &nk).total_cmp(&error_at(b, &nk))).unwrap_or(1);
+        let argmin = |ks: &[usize], e: &[f64]| -> usize {
+            (0..ks.len()).min_by(|&a, &b| e[a].total_cmp(&e[b])).map_or(1, |a| ks[a])
+        };
+        let near: Vec<usize> = (0..=DEAD_TIME_FLOOR.min(longest)).collect();
+        let errors: Vec<f64> = near.iter().map(|&k| error_at(k, &nk, &near_rows)).collect();
+        let mut best = argmin(&near, &errors);
+        // Beyond the floor only when the best is at its edge, the error still falling there
+        // (the fit's two taps reach the floor from one sample before it as well). A minimum
+        // inside the floor's range is kept: a nonlinearity can lend a linear model a longer dead
+        // time that fits a little better and describes the plant worse (docs/diagnose-history.md,
+        // stop 49).
+        if best + 1 >= DEAD_TIME_FLOOR && longest > DEAD_TIME_FLOOR {
+            let grid = dead_time_grid(longest);
+            let errors: Vec<f64> = grid.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
+            let at = grid.iter().position(|&k| k == argmin(&grid, &errors)).unwrap_or(0);
+            // Between the best grid point's neighbours every dead time is tried.
+            let fine: Vec<usize> =
+                (grid[at.saturating_sub(1)]..=grid[(at + 1).min(grid.len() - 1)]).collect();
+            let errors: Vec<f64> = fine.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
+            best = argmin(&fine, &errors);
+        }
         nk[i] = best;
     }
     let mut best: Option<(Orders, CvScore)> = None;
@@ -209,16 +226,16 @@ pub const DEAD_TIME_FLOOR: usize = 20;
 /// The longest dead time searched, in samples: a quarter of the shortest validation block, and
 /// at least [`DEAD_TIME_FLOOR`]. A record sampled fast against its plant carries dead times of
 /// tens or hundreds of samples (a process logged every second), which a fixed bound would
-/// replace by a nonlinear element's best imitation; a quarter of a block still leaves each
-/// block three quarters of its rows driven by its own inputs.
+/// leave a nonlinear element to imitate; a quarter of a block still leaves each block three
+/// quarters of its rows driven by its own inputs.
 pub fn max_dead_time(folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> usize {
     let block = folds.iter().map(|f| f.1.len()).min().unwrap_or(0);
     (block / 4).max(DEAD_TIME_FLOOR)
 }
 
-/// The dead times the search scores first: each one up to [`DEAD_TIME_FLOOR`], then steps of a
-/// tenth of the dead time up to `longest` (included). Between the best of them and its
-/// neighbours every dead time is then scored ([`linear_orders`]): a response's error grows
+/// The dead times the search scores past the floor: each one up to [`DEAD_TIME_FLOOR`], then
+/// steps of a tenth of the dead time up to `longest` (included). Between the best of them and
+/// its neighbours every dead time is then scored ([`linear_orders`]): a response's error grows
 /// smoothly as its start moves off the record's by a tenth.
 fn dead_time_grid(longest: usize) -> Vec<usize> {
     let mut grid: Vec<usize> = (0..=DEAD_TIME_FLOOR.min(longest)).collect();
