@@ -132,8 +132,9 @@ fn varies(y: &[f64]) -> bool {
 /// simulation error on the training rows (the same rows for every dead time compared; on a
 /// dithered record the one-step prediction error under the fit's noise model) of a [`fit`] at
 /// two poles and two taps, then poles and taps by cross-validation ([`CvScore::rank`] against
-/// `base`). Every dead time up to [`DEAD_TIME_FLOOR`] is scored, and when the best is at the
-/// floor's edge, the grid of [`dead_time_grid`] on to [`max_dead_time`]. The dead time is judged on
+/// `base`). Every dead time up to [`DEAD_TIME_FLOOR`] is scored, then the grid of
+/// [`dead_time_grid`] past it on to [`max_dead_time`], whose best replaces the first only when
+/// it simulates better on the rows past the longest. The dead time is judged on
 /// a fit by simulation error, not on the equation-error fit alone, which coloured noise and a
 /// slow pole bias (docs/diagnose-history.md, "The dead-time search of the linear re-fit").
 pub fn linear_orders(
@@ -174,20 +175,22 @@ pub fn linear_orders(
         let near: Vec<usize> = (0..=DEAD_TIME_FLOOR.min(longest)).collect();
         let errors: Vec<f64> = near.iter().map(|&k| error_at(k, &nk, &near_rows)).collect();
         let mut best = argmin(&near, &errors);
-        // Beyond the floor only when the best is at its edge, the error still falling there
-        // (the fit's two taps reach the floor from one sample before it as well). A minimum
-        // inside the floor's range is kept: a nonlinearity can lend a linear model a longer dead
-        // time that fits a little better and describes the plant worse (docs/diagnose-history.md,
-        // stop 49).
-        if best + 1 >= DEAD_TIME_FLOOR && longest > DEAD_TIME_FLOOR {
-            let grid = dead_time_grid(longest);
+        // Past the floor, a dead time replaces the floor range's best only when it simulates
+        // better than that one on the same rows (those past the longest): a minimum inside the
+        // floor's range is otherwise kept as it was found.
+        if longest > DEAD_TIME_FLOOR {
+            let grid: Vec<usize> =
+                dead_time_grid(longest).into_iter().filter(|&k| k > DEAD_TIME_FLOOR).collect();
             let errors: Vec<f64> = grid.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
             let at = grid.iter().position(|&k| k == argmin(&grid, &errors)).unwrap_or(0);
             // Between the best grid point's neighbours every dead time is tried.
-            let fine: Vec<usize> =
-                (grid[at.saturating_sub(1)]..=grid[(at + 1).min(grid.len() - 1)]).collect();
+            let lo = if at == 0 { DEAD_TIME_FLOOR + 1 } else { grid[at - 1] };
+            let fine: Vec<usize> = (lo..=grid[(at + 1).min(grid.len() - 1)]).collect();
             let errors: Vec<f64> = fine.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
-            best = argmin(&fine, &errors);
+            let far = argmin(&fine, &errors);
+            if error_at(far, &nk, &far_rows) < error_at(best, &nk, &far_rows) {
+                best = far;
+            }
         }
         nk[i] = best;
     }
