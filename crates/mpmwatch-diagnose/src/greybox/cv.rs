@@ -158,7 +158,9 @@ pub fn linear_orders(
             f64::INFINITY,
             |(f, s)| {
                 let e: Vec<f64> = s.iter().zip(d.y).map(|(a, b)| a - b).collect();
-                rows.iter().map(|&t| whitened(&e, &f.noise, t).powi(2)).sum()
+                let sse: f64 = rows.iter().map(|&t| whitened(&e, &f.noise, t).powi(2)).sum();
+                // A NaN would rank first under `total_cmp`; it is no fit.
+                if sse.is_nan() { f64::INFINITY } else { sse }
             },
         )
     };
@@ -236,10 +238,10 @@ pub fn max_dead_time(folds: &[(Vec<usize>, std::ops::Range<usize>)]) -> usize {
     (block / 4).max(DEAD_TIME_FLOOR)
 }
 
-/// The dead times the search scores past the floor: each one up to [`DEAD_TIME_FLOOR`], then
-/// steps of a tenth of the dead time up to `longest` (included). Between the best of them and
-/// its neighbours every dead time is then scored ([`linear_orders`]): a response's error grows
-/// smoothly as its start moves off the record's by a tenth.
+/// Each dead time up to [`DEAD_TIME_FLOOR`], then steps of a tenth of the dead time up to
+/// `longest` (included); [`linear_orders`] scores the points past the floor, then every dead
+/// time between the best of them and its neighbours, on the assumption that a response's
+/// error changes little while its start moves by a tenth.
 fn dead_time_grid(longest: usize) -> Vec<usize> {
     let mut grid: Vec<usize> = (0..=DEAD_TIME_FLOOR.min(longest)).collect();
     let mut k = DEAD_TIME_FLOOR;

@@ -510,7 +510,8 @@ fn linear_change(
     ts: f64,
     names: &Names<'_>,
 ) -> (Physics, String, BTreeMap<String, f64>, super::ElementCurve) {
-    let n = 2000;
+    // Long enough for the response to settle after the longest dead time searched.
+    let n = 2000 + orders.nk.iter().copied().max().unwrap_or(0);
     let mut u = vec![1.0; n];
     u[0] = 0.0;
     let s_new = step(f, orders, i, n);
