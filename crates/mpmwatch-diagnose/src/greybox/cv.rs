@@ -190,7 +190,8 @@ pub fn linear_orders(
             let fine: Vec<usize> = (lo..=grid[(at + 1).min(grid.len() - 1)]).collect();
             let errors: Vec<f64> = fine.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
             let far = argmin(&fine, &errors);
-            if error_at(far, &nk, &far_rows) < error_at(best, &nk, &far_rows) {
+            let far_error = errors[fine.iter().position(|&k| k == far).unwrap_or(0)];
+            if far_error < error_at(best, &nk, &far_rows) {
                 best = far;
             }
         }

@@ -98,8 +98,9 @@ fn sensor() -> Option<f64> {
 }
 
 /// `r` with the plant's response delayed by `d` samples: the input moved `d` samples earlier
-/// against the output, and the record `d` samples shorter.
-pub(crate) fn delayed(mut r: PhysicalRecord, d: usize) -> PhysicalRecord {
+/// against the output, and the record `d` samples shorter. The nominal simulation is left as
+/// it was (the old length), for the caller to refit.
+fn delayed(mut r: PhysicalRecord, d: usize) -> PhysicalRecord {
     let n = r.y.len() - d;
     r.u.drain(..d);
     r.y.truncate(n);
