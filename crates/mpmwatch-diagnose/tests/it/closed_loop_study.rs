@@ -2,10 +2,18 @@
 //! `WIDE=count` drawn by `wide_specs`, with the grey-box structures explaining the outputs the
 //! dithers flag (`GREYBOX=1`) or the residual corrections (default). Ignored; `SEED=100
 //! cargo test -p mpmwatch-diagnose --test it closed_loop_study -- --ignored --nocapture` prints
-//! one line per case and the rates (`VERBOSE=1` adds each case's draw).
+//! one line per case and the rates (`VERBOSE=1` adds each case's draw, the locating statistics
+//! of its changed channel and every finding's candidates; `GATE=open,closed` sets the honesty
+//! gate's two margins, in points).
 
 use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered};
 use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
+
+fn gate() -> Option<(f64, f64)> {
+    let v = std::env::var("GATE").ok()?;
+    let (a, b) = v.split_once(',')?;
+    Some((a.parse().ok()?, b.parse().ok()?))
+}
 
 #[test]
 #[ignore]
@@ -21,6 +29,9 @@ fn closed_loop_study() {
         greybox_closed_loop: greybox,
         locate: if std::env::var_os("PAPER").is_some() { Method::Paper } else { defaults.locate },
         alpha: std::env::var("ALPHA").ok().and_then(|v| v.parse().ok()).unwrap_or(defaults.alpha),
+        // GATE=open,closed: the honesty gate's two margins, in points.
+        min_gain_pct: gate().map_or(defaults.min_gain_pct, |g| g.0),
+        closed_loop_min_gain_pct: gate().map_or(defaults.closed_loop_min_gain_pct, |g| g.1),
         ..defaults
     };
     let (mut named, mut chan, mut total, mut alarms, mut nulls, mut fell) = (0, 0, 0, 0, 0, 0);
@@ -62,6 +73,12 @@ fn closed_loop_study() {
             alarms += usize::from(!d.report.findings.is_empty());
         }
         if verbose {
+            for c in d.report.channels.iter().filter(|c| c.input == tin && c.output == tout) {
+                eprintln!(
+                    "    locate {}→{}: MI {:.4} bits, limit {:.4}, {}, cross-correlation {}",
+                    c.input, c.output, c.norm_mi_bits, c.threshold_bits, c.verdict, c.ccf_significant
+                );
+            }
             for g in &d.report.findings {
                 eprintln!("    {}", g.summary);
                 for t in &g.tried {

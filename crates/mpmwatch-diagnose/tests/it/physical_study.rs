@@ -14,7 +14,11 @@
 //! and standard deviation and `|c|` drawn in 0.1..`top` with either sign (seeded by the case's
 //! seed); right is then `quadratic` on the output. A fourth, `DELAY=lo,hi`, delays every
 //! plant's response by a transport delay drawn in `lo..=hi` samples (seeded by the case's seed)
-//! before the nominal is fitted: a record sampled fast against its dead time.
+//! before the nominal is fitted: a record sampled fast against its dead time. A fifth,
+//! `QUANT=q`, reads the recorded output in steps of `q` plant-output standard deviations (a
+//! sensor's resolution); a sixth, `DRIFT=top`, adds a ramp of up to `top` standard deviations
+//! over the record, either way (a drift no input carries). Both come before the nominal is
+//! fitted, and can be combined with the others.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
@@ -117,7 +121,33 @@ fn delay() -> Option<(usize, usize)> {
     })
 }
 
-/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`, `DELAY`; the module's doc),
+/// `r` with its recorded output rounded to steps of `q` plant-output standard deviations, as a
+/// sensor with a coarse resolution reads it (TCLab's 0.32 °C is about a twentieth of its
+/// swing). The nominal is left as it was, for the caller to refit.
+fn quantised(mut r: PhysicalRecord, q: f64) -> PhysicalRecord {
+    let step = q * std_dev(&r.plant, 0);
+    r.y.iter_mut().for_each(|y| *y = (*y / step).round() * step);
+    r.description += &format!("; read in steps of {q:.2} std");
+    r
+}
+
+/// `r` with a ramp added to its recorded output, rising by `share` plant-output standard
+/// deviations over the record (a sensor's drift, a fouling exchanger: a change no input
+/// carries). The nominal is left as it was, for the caller to refit.
+fn drifting(mut r: PhysicalRecord, share: f64) -> PhysicalRecord {
+    let total = share * std_dev(&r.plant, 0);
+    let n = r.y.len() as f64;
+    r.y.iter_mut().enumerate().for_each(|(t, y)| *y += total * t as f64 / n);
+    r.description += &format!("; a drift of {share:+.2} std over the record");
+    r
+}
+
+/// A shift's number from the environment variable `name`, when it is set.
+fn env_number(name: &str) -> Option<f64> {
+    std::env::var(name).ok().map(|v| v.parse().unwrap_or_else(|_| panic!("{name}=number")))
+}
+
+/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`, `DELAY`, `QUANT`, `DRIFT`; the module's doc),
 /// unchanged without them.
 fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
@@ -148,7 +178,17 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
         let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x00DE_1A70_0000);
         r = delayed(r, rng.random_range(lo..=hi));
     }
-    if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() {
+    if let Some(q) = env_number("QUANT") {
+        r = quantised(r, q);
+    }
+    if let Some(top) = env_number("DRIFT") {
+        // A drift of up to `top` standard deviations, either way, from its own stream.
+        let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x00D2_1F70_0000);
+        let share = top * rng.random::<f64>() * if rng.random::<bool>() { 1.0 } else { -1.0 };
+        r = drifting(r, share);
+    }
+    let more = env_number("QUANT").is_some() || env_number("DRIFT").is_some();
+    if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() || more {
         let o = orders.unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
         if orders.is_some() {
             r.description += &format!("; nominal ARX [{} {} {}]", o.0, o.1, o.2);
