@@ -3,16 +3,20 @@
 //! dithers flag (`GREYBOX=1`) or the residual corrections (default). Ignored; `SEED=100
 //! cargo test -p mpmwatch-diagnose --test it closed_loop_study -- --ignored --nocapture` prints
 //! one line per case and the rates (`VERBOSE=1` adds each case's draw, the locating statistics
-//! of its changed channel and every finding's candidates; `GATE=open,closed` sets the honesty
-//! gate's two margins, in points).
+//! of its changed channel (MI and cross-correlation; not the dither-projection test) and every
+//! finding's candidates; `GATE=a,b` sets the honesty gate's two margins, in points:
+//! `min_gain_pct` and `closed_loop_min_gain_pct`).
 
 use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered};
 use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
 
+/// `GATE=a,b`: the honesty gate's `min_gain_pct` (here the small, consistent gain's margin
+/// with the class lead) and `closed_loop_min_gain_pct`, in points.
 fn gate() -> Option<(f64, f64)> {
     let v = std::env::var("GATE").ok()?;
-    let (a, b) = v.split_once(',')?;
-    Some((a.parse().ok()?, b.parse().ok()?))
+    let parse = |x: &str| x.trim().parse::<f64>().unwrap_or_else(|_| panic!("GATE=a,b in points, not {v}"));
+    let (a, b) = v.split_once(',').unwrap_or_else(|| panic!("GATE=a,b in points, not {v}"));
+    Some((parse(a), parse(b)))
 }
 
 #[test]
@@ -29,7 +33,7 @@ fn closed_loop_study() {
         greybox_closed_loop: greybox,
         locate: if std::env::var_os("PAPER").is_some() { Method::Paper } else { defaults.locate },
         alpha: std::env::var("ALPHA").ok().and_then(|v| v.parse().ok()).unwrap_or(defaults.alpha),
-        // GATE=open,closed: the honesty gate's two margins, in points.
+        // GATE=a,b: the honesty gate's two margins, in points.
         min_gain_pct: gate().map_or(defaults.min_gain_pct, |g| g.0),
         closed_loop_min_gain_pct: gate().map_or(defaults.closed_loop_min_gain_pct, |g| g.1),
         ..defaults

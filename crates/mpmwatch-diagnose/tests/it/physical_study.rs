@@ -17,8 +17,9 @@
 //! before the nominal is fitted: a record sampled fast against its dead time. A fifth,
 //! `QUANT=q`, reads the recorded output in steps of `q` plant-output standard deviations (a
 //! sensor's resolution); a sixth, `DRIFT=top`, adds a ramp of up to `top` standard deviations
-//! over the record, either way (a drift no input carries). Both come before the nominal is
-//! fitted, and can be combined with the others.
+//! over the record, either way (a drift no input carries; one draw per seed, shared by the
+//! classes). Both come before the nominal is fitted, and can be combined with the others (the
+//! drift before the steps).
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
@@ -122,10 +123,14 @@ fn delay() -> Option<(usize, usize)> {
 }
 
 /// `r` with its recorded output rounded to steps of `q` plant-output standard deviations, as a
-/// sensor with a coarse resolution reads it (TCLab's 0.32 °C is about a twentieth of its
-/// swing). The nominal is left as it was, for the caller to refit.
+/// sensor with a coarse resolution reads it (TCLab's 0.32 °C is 0.03 to 0.05 of its output's
+/// standard deviation). The nominal is left as it was, for the caller to refit.
 fn quantised(mut r: PhysicalRecord, q: f64) -> PhysicalRecord {
     let step = q * std_dev(&r.plant, 0);
+    assert!(
+        step > 0.0 && step.is_finite(),
+        "QUANT={q}: a step of {step} (q must be > 0 on a plant that moves)"
+    );
     r.y.iter_mut().for_each(|y| *y = (*y / step).round() * step);
     r.description += &format!("; read in steps of {q:.2} std");
     r
@@ -178,14 +183,16 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
         let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x00DE_1A70_0000);
         r = delayed(r, rng.random_range(lo..=hi));
     }
-    if let Some(q) = env_number("QUANT") {
-        r = quantised(r, q);
-    }
     if let Some(top) = env_number("DRIFT") {
-        // A drift of up to `top` standard deviations, either way, from its own stream.
+        // A drift of up to `top` standard deviations, either way, from its own stream: one
+        // draw per seed, the same for every class at that seed.
         let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x00D2_1F70_0000);
         let share = top * rng.random::<f64>() * if rng.random::<bool>() { 1.0 } else { -1.0 };
         r = drifting(r, share);
+    }
+    // After the drift, so that a drifting reading is still on the sensor's steps.
+    if let Some(q) = env_number("QUANT") {
+        r = quantised(r, q);
     }
     let more = env_number("QUANT").is_some() || env_number("DRIFT").is_some();
     if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() || more {
