@@ -114,6 +114,7 @@ fn by_structures(
         &plan.split.folds,
         opts.warmup,
         opts.min_gain_pct,
+        opts.drift_min_gain_pct,
         plan.ts,
         &names,
     )

@@ -56,6 +56,12 @@ pub struct DiagnoseOptions {
     /// still passes at `min_gain_pct` on average when no block is lower and its class's score
     /// leads every other class's by 10 units (the data single out what was left out).
     pub closed_loop_min_gain_pct: f64,
+    /// Open loop: points of cross-validated FIT a straight line in time must add to the
+    /// nominal's simulation, beside a constant, on average and on no block less, for every
+    /// grey-box structure and the nominal's reference to carry a drift term (an output drifting
+    /// in a way no input carries; see `greybox::drifts`). Default 1.0; `f64::INFINITY` never
+    /// fits a drift.
+    pub drift_min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,
     /// Closed loop: how hypotheses are scored (default: prediction error, [`Scoring`]).
@@ -89,6 +95,7 @@ impl Default for DiagnoseOptions {
             penalty: 1.0,
             min_gain_pct: 0.5,
             closed_loop_min_gain_pct: 2.0,
+            drift_min_gain_pct: 1.0,
             warmup: 20,
             scoring: Scoring::default(),
             greybox_closed_loop: false,
@@ -194,6 +201,13 @@ pub(crate) fn validate<'a>(
         if !(margin.is_finite() && (0.0..=100.0).contains(&margin)) {
             return Err(DiagnoseError::invalid(name, format!("{margin} points is not in [0, 100]")));
         }
+    }
+    let drift = opts.drift_min_gain_pct;
+    if !(drift == f64::INFINITY || (0.0..=100.0).contains(&drift)) {
+        return Err(DiagnoseError::invalid(
+            "drift minimum gain",
+            format!("{drift} points is not in [0, 100] nor infinite (never a drift)"),
+        ));
     }
     if !(opts.alpha > 0.0 && opts.alpha < 1.0) {
         return Err(DiagnoseError::invalid("alpha", format!("{} is not in (0, 1)", opts.alpha)));
@@ -305,6 +319,8 @@ mod tests {
             (DiagnoseOptions { alpha: 1.0, ..Default::default() }, "alpha"),
             (DiagnoseOptions { holdout_fraction: 0.9, ..Default::default() }, "holdout fraction"),
             (DiagnoseOptions { min_gain_pct: f64::NAN, ..Default::default() }, "minimum gain"),
+            (DiagnoseOptions { drift_min_gain_pct: -1.0, ..Default::default() }, "drift minimum gain"),
+            (DiagnoseOptions { drift_min_gain_pct: f64::NAN, ..Default::default() }, "drift minimum gain"),
             (
                 DiagnoseOptions { closed_loop_min_gain_pct: -1.0, ..Default::default() },
                 "closed-loop minimum gain",

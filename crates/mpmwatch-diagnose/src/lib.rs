@@ -164,6 +164,7 @@ pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Dia
             .to_string(),
             min_gain_pct: opts.min_gain_pct,
             closed_loop_min_gain_pct: opts.closed_loop_min_gain_pct,
+            drift_min_gain_pct: opts.drift_min_gain_pct.is_finite().then_some(opts.drift_min_gain_pct),
             locate: match opts.locate {
                 Method::Family => "family",
                 Method::Paper => "paper",

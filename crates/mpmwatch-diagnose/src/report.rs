@@ -181,6 +181,11 @@ pub struct Settings {
     /// report written before it was recorded).
     #[serde(default)]
     pub closed_loop_min_gain_pct: f64,
+    /// Open loop: what a straight line in time must add to the nominal's cross-validated FIT for
+    /// the structures to carry a drift term, in points (`null`: never, or a report written
+    /// before it was recorded).
+    #[serde(default)]
+    pub drift_min_gain_pct: Option<f64>,
     /// The MI matrix's decision rule in the locating step (`family` or `paper`; empty in a
     /// report written before the rule was recorded).
     #[serde(default)]

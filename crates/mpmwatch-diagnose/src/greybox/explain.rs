@@ -40,12 +40,13 @@ use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{
-    CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, elements, fit, linear_orders,
-    max_dead_time, nominal_cv_fit, starting_at,
+    Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, TREND_UNIT, cv_fit, drifts, elements, fit,
+    linear_orders, max_dead_time, nominal_cv_fit, starting_at,
 };
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
 use crate::report::{Finding, Tried};
+use mpmwatch_core::numerics::least_squares_rows;
 
 /// Points of cross-validated FIT a physics element must gain over the re-fitted linear model:
 /// an element nests the linear model, so on a linear plant it gains only by fitting noise.
@@ -99,7 +100,9 @@ pub struct Names<'a> {
 
 /// Explains one output. `s` is the nominal simulation, `nominal` the nominal model identified
 /// from it, `flagged` the inputs the localisation implicated, `folds` the blocked folds of the
-/// training rows, `min_gain` the smallest gain in points that counts, `ts` the sample time.
+/// training rows, `min_gain` the smallest gain in points that counts, `drift_min_gain` what a
+/// drift must add to the nominal for every structure to carry one ([`drifts`]; open loop only,
+/// +∞ never), `ts` the sample time.
 #[allow(clippy::too_many_arguments)]
 pub fn explain(
     d: &Data<'_>,
@@ -109,15 +112,21 @@ pub fn explain(
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
     warmup: usize,
     min_gain: f64,
+    drift_min_gain: f64,
     ts: f64,
     names: &Names<'_>,
 ) -> Explanation {
     let longest = max_dead_time(folds);
+    // An output that drifts: every structure and the nominal's reference carry the same
+    // nuisance, so that what a hypothesis is credited with is what it explains beside it.
+    let drift = d.noise_order == 0 && drifts(s, d.y, folds, drift_min_gain);
+    let beside = if drift { Beside::Drift } else { Beside::Nothing };
+    let drift_text = if drift { drift_note(s, d, names.output) } else { String::new() };
     // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
     // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders are
     // the user's knowledge of the plant). The linear model competes at both.
-    let mut linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order));
-    let from_nominal = nominal_orders(nominal, d.u.len(), longest);
+    let mut linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside), drift);
+    let from_nominal = Orders { trend: drift, ..nominal_orders(nominal, d.u.len(), longest) };
     // A simulation copies the record up to its longest dead time and taps, so those rows have no
     // error; every block is scored after them, or a long dead time would be credited with them
     // against the nominal.
@@ -132,7 +141,7 @@ pub fn explain(
     } else {
         folds
     };
-    let nominal_cv = nominal_cv_fit(s, d.y, folds, d.noise_order);
+    let nominal_cv = nominal_cv_fit(s, d.y, folds, d.noise_order, beside);
     // Candidates are ranked in the currency their fits were made in (see `CvScore::rank`); the
     // gate is always the plain FIT's.
     let rank = |v: &CvScore| v.rank(&nominal_cv, d.noise_order);
@@ -205,7 +214,8 @@ pub fn explain(
                 match share.filter(|&s| s.is_nan() || s < MIN_ACTING) {
                     Some(share) => withheld.push(held(el.physics(), Why::Idle(share), v)),
                     None => {
-                        let (summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+                        let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+                        summary += &drift_text;
                         return Explanation {
                             finding: finding(
                                 names,
@@ -240,6 +250,7 @@ pub fn explain(
                 let (physics, mut summary, parameters, curve) =
                     linear_change(nominal, &f, orders, i, modelled, ts, names);
                 summary += &at_the_bound(physics, orders, i, longest);
+                summary += &drift_text;
                 tried.push(Tried {
                     physics,
                     score_vs_null: None,
@@ -290,7 +301,7 @@ pub fn explain(
             lv.min_gain_over(&nominal_cv),
         ),
         _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
-    };
+    } + &drift_text;
     let i = flagged.first().copied().unwrap_or(0);
     let withheld = !withheld.is_empty();
     Explanation {
@@ -299,6 +310,23 @@ pub fn explain(
         curve: None,
         withheld,
     }
+}
+
+/// The sentence a finding carries when the structures were fitted beside a drift: the drift
+/// over the training rows, read as the straight line the nominal's simulation error follows
+/// there.
+fn drift_note(s: &[f64], d: &Data<'_>, output: &str) -> String {
+    let rows: Vec<usize> = d.train.clone().collect();
+    let e: Vec<f64> = d.y.iter().zip(s).map(|(y, s)| y - s).collect();
+    let ones = vec![1.0; e.len()];
+    let time: Vec<f64> = (0..e.len()).map(|t| t as f64 / TREND_UNIT).collect();
+    let Some(c) = least_squares_rows(&[&ones, &time], &e, &rows) else { return String::new() };
+    let over = c[1] * rows.len() as f64 / TREND_UNIT;
+    format!(
+        "; every structure was fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time)",
+        if over >= 0.0 { "+" } else { "" },
+        num(over)
+    )
 }
 
 /// A correction that passed the gate against the nominal and was not reported.
@@ -418,7 +446,7 @@ fn nominal_orders(nominal: &NominalArx, inputs: usize, longest: usize) -> Orders
             first.min(longest)
         })
         .collect();
-    Orders { na, nb, nk }
+    Orders { na, nb, nk, trend: false }
 }
 
 /// Free parameters of an element on the linear orders.
@@ -610,10 +638,10 @@ mod tests {
     #[test]
     fn nominal_orders_are_read_off_the_coefficients() {
         let n = nominal(vec![1.0, -1.5, 0.6], vec![vec![0.0, 1e-6, 0.4, 0.2], vec![0.3, 0.0, 0.0, 0.0]]);
-        assert_eq!(nominal_orders(&n, 2, 20), Orders { na: 2, nb: 2, nk: vec![2, 0] });
+        assert_eq!(nominal_orders(&n, 2, 20), Orders { na: 2, nb: 2, nk: vec![2, 0], trend: false });
         // More than 3 poles or taps are capped; an all-zero numerator gives a tap at lag 0.
         let n = nominal(vec![1.0, -0.5, 0.1, 0.01, 0.001], vec![vec![0.1, 0.2, 0.3, 0.4, 0.5], vec![0.0; 5]]);
-        assert_eq!(nominal_orders(&n, 2, 20), Orders { na: 3, nb: 3, nk: vec![0, 0] });
+        assert_eq!(nominal_orders(&n, 2, 20), Orders { na: 3, nb: 3, nk: vec![0, 0], trend: false });
     }
 
     /// A linear change is drawn as the two step responses: the model's (its own channel, as
@@ -659,7 +687,7 @@ mod tests {
         let names = Names { inputs: vec!["u"], output: "y" };
         let explained = |y: &[f64]| {
             let d = Data { u: vec![&u], y, train: train.clone(), nominal: Some(&s), noise_order: 0 };
-            explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, &names)
+            explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, 1.0, &names)
         };
 
         let fast = explained(&first_order(0.95));
@@ -717,7 +745,7 @@ mod tests {
 
         // The record's plant answers three samples later.
         let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0], noise: vec![] };
-        let orders = Orders { na: 1, nb: 1, nk: vec![4] };
+        let orders = Orders { na: 1, nb: 1, nk: vec![4], trend: false };
         let (physics, summary, parameters, c) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
         assert!(!summary.contains("longest dead time"), "{summary}");
@@ -732,7 +760,7 @@ mod tests {
         }
 
         // A dead time at the search's bound is said to be one.
-        let orders = Orders { na: 1, nb: 1, nk: vec![40] };
+        let orders = Orders { na: 1, nb: 1, nk: vec![40], trend: false };
         let (physics, ..) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
         let note = at_the_bound(physics, &orders, 0, 40);
@@ -742,7 +770,7 @@ mod tests {
 
         // Twice the gain, the same timing.
         let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0], noise: vec![] };
-        let orders = Orders { na: 1, nb: 1, nk: vec![1] };
+        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false };
         let (physics, _, _, c) = linear_change(&model, &strong, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::Gain);
         let (end_new, end_old) = (c.points.last().unwrap().1, c.baseline.last().unwrap().1);

@@ -295,7 +295,11 @@ pub fn map_input(u: &[&[f64]], i: usize, map: impl FnOnce(&[f64]) -> Vec<f64>) -
     out
 }
 
-/// The linear part's orders: `na` poles, and per input `nb` numerator taps after `nk` samples.
+/// The linear part's orders: `na` poles, and per input `nb` numerator taps after `nk` samples;
+/// with `trend`, a drift term `δ·τ(t)` beside the constant `c` of the recursion, `τ(t)` the row
+/// index in thousands of samples ([`TREND_UNIT`]). The trend is a nuisance: an output drifting
+/// in a way no input carries (a sensor's drift, a slow unmeasured load) would otherwise bend
+/// every structure's dynamics, the linear re-fit's as much as an element's.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Orders {
     /// Poles.
@@ -304,7 +308,14 @@ pub struct Orders {
     pub nb: usize,
     /// Dead time per input, samples.
     pub nk: Vec<usize>,
+    /// Whether the recursion carries a drift term.
+    pub trend: bool,
 }
+
+/// Samples per unit of the drift term's time `τ(t) = t / TREND_UNIT`: a drift over a record of
+/// thousands of samples then has a coefficient of the output's own order, as the optimiser's
+/// steps expect.
+pub const TREND_UNIT: f64 = 1000.0;
 
 impl Orders {
     /// The first row at which every lag is inside the record: a simulation under these orders
@@ -320,7 +331,8 @@ impl Orders {
 pub struct Fitted {
     /// The element's own parameters.
     pub p: Vec<f64>,
-    /// `α`, then `β` per signal, then `γ`, then `c`.
+    /// `α`, then `β` per signal, then `γ`, then the drift's `δ` (with [`Orders::trend`]), then
+    /// `c`.
     pub theta: Vec<f64>,
     /// The AR noise model of a prediction-error fit, `e(t) = Σ_k a_k e(t−k) + ε(t)` for the
     /// simulation error `e`; empty for an output-error fit (white noise).
@@ -387,7 +399,11 @@ impl Model<'_> {
 
     /// Coefficients in `theta`.
     fn n_theta(&self, signals: usize) -> usize {
-        self.orders.na + signals * self.orders.nb + self.element.feedbacks() + 1
+        self.orders.na
+            + signals * self.orders.nb
+            + self.element.feedbacks()
+            + usize::from(self.orders.trend)
+            + 1
     }
 
     /// Simulation of the output over the whole record, from the recorded output's first
@@ -408,8 +424,9 @@ impl Model<'_> {
         let nf = self.element.feedbacks();
         let fb0 = o.na + sig.len() * o.nb;
         let mut fb = Vec::with_capacity(nf);
+        let drift = if o.trend { f.theta[f.theta.len() - 2] } else { 0.0 };
         for t in first..n {
-            let mut v = f.theta[f.theta.len() - 1];
+            let mut v = f.theta[f.theta.len() - 1] + drift * t as f64 / TREND_UNIT;
             for k in 1..=o.na {
                 v += f.theta[k - 1] * x[t - k];
             }
@@ -472,6 +489,9 @@ impl Model<'_> {
                 }
             }
             cols.extend(f);
+        }
+        if o.trend {
+            cols.push((0..n).map(|t| t as f64 / TREND_UNIT).collect());
         }
         cols.push(vec![1.0; n]);
         let ok = |t: usize| (0..=o.na).all(|k| t >= k && self.element.invertible(p, y[t - k]));
@@ -565,7 +585,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
     ]
 }
 
-pub use cv::{CvScore, cv_fit, linear_orders, max_dead_time, nominal_cv_fit, starting_at};
+pub use cv::{Beside, CvScore, cv_fit, drifts, linear_orders, max_dead_time, nominal_cv_fit, starting_at};
 pub use explain::{Explanation, Names, explain};
 pub use linear::Linear;
 pub use structure::{FittedGreyBox, GreyBox, Structure};
@@ -591,8 +611,11 @@ mod tests {
             (&[0.0], 0.0),
         ];
         for (alpha, want) in cases {
-            let m =
-                Model { element: &Linear, input: 0, orders: Orders { na: alpha.len(), nb: 1, nk: vec![1] } };
+            let m = Model {
+                element: &Linear,
+                input: 0,
+                orders: Orders { na: alpha.len(), nb: 1, nk: vec![1], trend: false },
+            };
             let mut theta = alpha.to_vec();
             theta.extend([0.5, 0.0]);
             let f = Fitted { p: Vec::new(), theta, noise: Vec::new() };
@@ -604,13 +627,42 @@ mod tests {
         let m = Model {
             element: &storage_limit::StorageLimit,
             input: 0,
-            orders: Orders { na: 1, nb: 1, nk: vec![1] },
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
         };
         for (store, want) in [(0.999, 0.999), (0.3, 0.5), (f64::NAN, f64::INFINITY)] {
             let f = Fitted { p: vec![store, -1.0, 1.0], theta: vec![0.5, 0.5, 0.0], noise: Vec::new() };
             let got = m.slowest_pole(&f);
             assert!(got == want || (got - want).abs() < 1e-9, "store {store}: {got} against {want}");
         }
+    }
+
+    /// A noise-free first-order plant `x(t) = 0.9 x(t−1) + 0.2 u(t−1)` read with a drift,
+    /// `y = x + 0.002·t`: then `y(t) = 0.9 y(t−1) + 0.2 u(t−1) + 0.0002·t + 0.0018` exactly, a
+    /// recursion the trend term holds (δ = 0.2 per thousand samples, c = 0.0018). Fitted on the
+    /// first 2100 rows, it simulates the 900 after them, beyond every row it saw, to the
+    /// optimiser's tolerance; without the trend the same structure cannot follow the drift.
+    #[test]
+    fn a_trend_term_carries_a_drift_beyond_the_fit_rows() {
+        let n = 3000;
+        let u: Vec<f64> = (0..n).map(|t| ((t / 23 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
+        let mut y = vec![0.0; n];
+        let mut x = 0.0;
+        for t in 1..n {
+            x = 0.9 * x + 0.2 * u[t - 1];
+            y[t] = x + 0.002 * t as f64;
+        }
+        let d = Data { u: vec![&u], y: &y, train: 0..2100, nominal: None, noise_order: 0 };
+        let rows: Vec<usize> = (10..2100).collect();
+        let sim = |trend: bool| {
+            let m = Model { element: &Linear, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend } };
+            let f = fit(&m, &d, &rows).unwrap();
+            (m.simulate(&f, &d.u, &y).unwrap(), f)
+        };
+        let (with, f) = sim(true);
+        assert!(fit_pct(&y[2100..], &with[2100..]) > 99.9, "{f:?}");
+        assert!((f.theta[0] - 0.9).abs() < 1e-3 && (f.theta[2] - 0.2).abs() < 1e-3, "{f:?}");
+        let (without, _) = sim(false);
+        assert!(fit_pct(&y[2100..], &without[2100..]) < 99.0);
     }
 
     /// Where each element with a kink acts, counted on a ramp of 100 samples from 0 to 0.99
@@ -627,7 +679,8 @@ mod tests {
         // The simulated reading as a clip returns it, the limit itself where it clips.
         let read: Vec<f64> = u.iter().map(|v| v.min(0.905)).collect();
         let share = |el: &dyn Element, p: Vec<f64>, rows: &[usize]| {
-            let m = Model { element: el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+            let m =
+                Model { element: el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
             let f = Fitted { p, theta: vec![0.0, 1.0, 0.0], noise: Vec::new() };
             m.acting_share(&f, &[&u], &read, rows)
         };
@@ -662,7 +715,7 @@ mod tests {
         }
         let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None, noise_order: 0 };
         let el = dead_zone::DeadZone;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2] } };
+        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false } };
         let rows: Vec<usize> = (10..1200).collect();
         let f = fit(&m, &d, &rows).unwrap();
         assert!((f.p[1].abs() - 0.3).abs() < 1e-3, "{f:?}");
@@ -687,7 +740,7 @@ mod tests {
         let u: Vec<f64> = (0..400).map(|t| ((t / 9 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
         let d = Data { u: vec![&u], y: &u, train: 0..400, nominal: None, noise_order: 0 };
         let el = backlash::Backlash;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
         let f = Fitted { p: vec![0.4], theta: vec![0.8, 0.5, 0.0], noise: vec![] };
         let c = m.curve(&f, &d, "u", "y").expect("backlash has a loop");
         assert_eq!(c.points.len(), 401);
@@ -723,7 +776,8 @@ mod tests {
             }
             let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None, noise_order: 0 };
             let el = polynomial::Polynomial { degree };
-            let model = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2] } };
+            let model =
+                Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false } };
             let rows: Vec<usize> = (10..1200).collect();
             let f = fit(&model, &d, &rows).unwrap();
             let curve = model.curve(&f, &d, "u", "y").expect("a polynomial has a map");
@@ -757,7 +811,8 @@ mod tests {
         }
         let d = Data { u: vec![&u], y: &y, train: 0..800, nominal: None, noise_order: 0 };
         let el = polynomial::Polynomial { degree: 2 };
-        let model = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2] } };
+        let model =
+            Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false } };
         let rows: Vec<usize> = (10..800).collect();
         let f = fit(&model, &d, &rows).unwrap();
         let train_mean = u[..800].iter().sum::<f64>() / 800.0;
@@ -788,7 +843,7 @@ mod tests {
         }
         let y: Vec<f64> = x.iter().map(|v| v.abs()).collect();
         let el = abs_sensor::AbsSensor;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
         let rows: Vec<usize> = (100..1500).collect();
         for nominal in [Some(&x[..]), None] {
             let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal, noise_order: 0 };
@@ -812,7 +867,7 @@ mod tests {
         }
         let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal: None, noise_order: 0 };
         let el = stiffness::CubicStiffness;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 2, nb: 1, nk: vec![1] } };
+        let m = Model { element: &el, input: 0, orders: Orders { na: 2, nb: 1, nk: vec![1], trend: false } };
         let rows: Vec<usize> = (10..1500).collect();
         let f = fit(&m, &d, &rows).unwrap();
         let s = m.simulate(&f, &d.u, &y).unwrap();

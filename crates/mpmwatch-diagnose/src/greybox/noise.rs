@@ -80,7 +80,11 @@ mod tests {
                 u[t] = -0.5 * y[t] + dither;
             }
             let rows: Vec<usize> = (20..n).collect();
-            let m = Model { element: &Linear, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+            let m = Model {
+                element: &Linear,
+                input: 0,
+                orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+            };
             let gain_pole = |noise_order: usize| {
                 let d = Data { u: vec![&u], y: &y, train: 0..n, nominal: None, noise_order };
                 let f = fit(&m, &d, &rows).unwrap();

@@ -155,7 +155,11 @@ mod tests {
             .map(|(&v, &r)| (SensorPolynomial.output(&truth, v) - r).abs())
             .fold(0.0, f64::max);
         assert!(err < 1e-9, "the readings are the curve of the plant's output to {err}");
-        let m = Model { element: &SensorPolynomial, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+        let m = Model {
+            element: &SensorPolynomial,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+        };
         // From row 60 the start of the simulation (the first readings taken as true values) has
         // decayed to 0.8^60 ≈ 2e-6 of the readings' bend.
         let rows: Vec<usize> = (60..n).collect();

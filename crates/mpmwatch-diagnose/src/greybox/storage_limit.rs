@@ -132,7 +132,11 @@ mod tests {
             y[t] = 0.7 * y[t - 1] + 0.5 * s[t - 1];
         }
         let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal: None, noise_order: 0 };
-        let m = Model { element: &StorageLimit, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1] } };
+        let m = Model {
+            element: &StorageLimit,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+        };
         let rows: Vec<usize> = (10..1500).collect();
         let f = fit(&m, &d, &rows).unwrap();
         let upper = f.p[1].max(f.p[2]);

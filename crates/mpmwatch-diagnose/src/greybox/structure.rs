@@ -72,7 +72,7 @@ impl GreyBox {
             ));
         }
         let element = self.structure.element();
-        let orders = Orders { na: self.na, nb: self.nb, nk: self.nk.clone() };
+        let orders = Orders { na: self.na, nb: self.nb, nk: self.nk.clone(), trend: false };
         let d = Data { u: u.to_vec(), y, train: rows.clone(), nominal: None, noise_order: 0 };
         let model = Model { element: element.as_ref(), input: 0, orders: orders.clone() };
         let idx: Vec<usize> = rows.collect();

@@ -44,7 +44,13 @@ pub(crate) fn diagnose_against(r: &PhysicalRecord, s: &[f64]) -> Diagnosis {
         simulated: vec![Signal { name: "y1", values: s }],
         physical: Vec::new(),
     };
-    diagnose(&input, &DiagnoseOptions::default()).expect("diagnosis")
+    // `DRIFT_GAIN=points` (`inf`: never) sets what a drift must add before the structures carry one.
+    let defaults = DiagnoseOptions::default();
+    let opts = DiagnoseOptions {
+        drift_min_gain_pct: env_number("DRIFT_GAIN").unwrap_or(defaults.drift_min_gain_pct),
+        ..defaults
+    };
+    diagnose(&input, &opts).expect("diagnosis")
 }
 
 /// What a diagnosis said about a case: the named physics (`none` without a finding) and the

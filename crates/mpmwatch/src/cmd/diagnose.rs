@@ -70,6 +70,13 @@ pub struct Args {
     /// with 0.5 to 2 points, three fell on the held-out tail.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().closed_loop_min_gain_pct)]
     closed_loop_min_gain: f64,
+    /// Open loop: an output may drift in a way no input carries (a sensor's drift, a slow
+    /// unmeasured load). When a straight line in time, fitted beside the model's simulation on
+    /// held-back training data, raises its FIT by this many points on average and on every
+    /// block, every hypothesis and the model's reference carry a drift term, and the finding
+    /// says so. `inf` never fits one.
+    #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().drift_min_gain_pct)]
+    drift_min_gain: f64,
     /// How the MI matrix flags a channel. `family`: one test per element over every lag of
     /// pairwise MI, joint-lag MI and the cross-correlation, at the false-alarm rate --alpha per
     /// record. `paper`: the paper's μ + 6σ per statistic, which misses linear mismatches a
@@ -175,6 +182,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         scoring: args.scoring.into(),
         min_gain_pct: args.min_gain,
         closed_loop_min_gain_pct: args.closed_loop_min_gain,
+        drift_min_gain_pct: args.drift_min_gain,
         locate: args.method,
         alpha: args.alpha,
         ..DiagnoseOptions::default()
