@@ -56,11 +56,11 @@ pub struct DiagnoseOptions {
     /// still passes at `min_gain_pct` on average when no block is lower and its class's score
     /// leads every other class's by 10 units (the data single out what was left out).
     pub closed_loop_min_gain_pct: f64,
-    /// Open loop: points of cross-validated FIT a straight line in time must add to the
-    /// nominal's simulation, beside a constant, on average and on no block less, for every
-    /// grey-box structure and the nominal's reference to carry a drift term (an output drifting
-    /// in a way no input carries; see `greybox::drifts`). Default 1.0; `f64::INFINITY` never
-    /// fits a drift.
+    /// Open loop: points of cross-validated FIT a drift term (a straight line in time) must add
+    /// to the re-fitted linear model, on average over the blocks, for every grey-box structure
+    /// and the nominal's reference to carry one: an output drifting in a way no input carries
+    /// bends every re-fit otherwise (`greybox::drift_gain`). Default 1.0; `f64::INFINITY`
+    /// never fits a drift.
     pub drift_min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,

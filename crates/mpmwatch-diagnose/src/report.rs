@@ -181,8 +181,8 @@ pub struct Settings {
     /// report written before it was recorded).
     #[serde(default)]
     pub closed_loop_min_gain_pct: f64,
-    /// Open loop: what a straight line in time must add to the nominal's cross-validated FIT for
-    /// the structures to carry a drift term, in points (`null`: never, or a report written
+    /// Open loop: what a drift term must add to the re-fitted linear model's cross-validated FIT
+    /// for every structure to carry one, in points (`null`: never, or a report written
     /// before it was recorded).
     #[serde(default)]
     pub drift_min_gain_pct: Option<f64>,

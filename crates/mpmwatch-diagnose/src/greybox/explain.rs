@@ -40,13 +40,12 @@ use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::{
-    Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, TREND_UNIT, cv_fit, drifts, elements, fit,
+    Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, drift_gain, elements, fit,
     linear_orders, max_dead_time, nominal_cv_fit, starting_at,
 };
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
 use crate::report::{Finding, Tried};
-use mpmwatch_core::numerics::least_squares_rows;
 
 /// Points of cross-validated FIT a physics element must gain over the re-fitted linear model:
 /// an element nests the linear model, so on a linear plant it gains only by fitting noise.
@@ -100,9 +99,9 @@ pub struct Names<'a> {
 
 /// Explains one output. `s` is the nominal simulation, `nominal` the nominal model identified
 /// from it, `flagged` the inputs the localisation implicated, `folds` the blocked folds of the
-/// training rows, `min_gain` the smallest gain in points that counts, `drift_min_gain` what a
-/// drift must add to the nominal for every structure to carry one ([`drifts`]; open loop only,
-/// +∞ never), `ts` the sample time.
+/// training rows, `min_gain` the smallest gain in points that counts, `drift_min_gain` the
+/// points of cross-validated FIT a drift term must add to the re-fitted linear model for every
+/// structure to carry one ([`drift_gain`]; open loop only, +∞ never), `ts` the sample time.
 #[allow(clippy::too_many_arguments)]
 pub fn explain(
     d: &Data<'_>,
@@ -117,15 +116,23 @@ pub fn explain(
     names: &Names<'_>,
 ) -> Explanation {
     let longest = max_dead_time(folds);
-    // An output that drifts: every structure and the nominal's reference carry the same
-    // nuisance, so that what a hypothesis is credited with is what it explains beside it.
-    let drift = d.noise_order == 0 && drifts(s, d.y, folds, drift_min_gain);
-    let beside = if drift { Beside::Drift } else { Beside::Nothing };
-    let drift_text = if drift { drift_note(s, d, names.output) } else { String::new() };
     // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
     // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders are
     // the user's knowledge of the plant). The linear model competes at both.
-    let mut linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside), drift);
+    let mut linear =
+        linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, Beside::Nothing), false);
+    // An output that drifts in a way no input carries: every structure and the nominal's
+    // reference then carry the same nuisance, so that what a hypothesis is credited with is
+    // what it explains beside it.
+    let drift_gain = match &linear {
+        Some(l) if d.noise_order == 0 && drift_min_gain.is_finite() => drift_gain(d, folds, l),
+        _ => None,
+    };
+    let drift = drift_gain.is_some_and(|g| g >= drift_min_gain);
+    let beside = if drift { Beside::Drift } else { Beside::Nothing };
+    if drift {
+        linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside), true);
+    }
     let from_nominal = Orders { trend: drift, ..nominal_orders(nominal, d.u.len(), longest) };
     // A simulation copies the record up to its longest dead time and taps, so those rows have no
     // error; every block is scored after them, or a long dead time would be credited with them
@@ -215,7 +222,7 @@ pub fn explain(
                     Some(share) => withheld.push(held(el.physics(), Why::Idle(share), v)),
                     None => {
                         let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
-                        summary += &drift_text;
+                        summary += &drift_note(&m, &f, d, names.output);
                         return Explanation {
                             finding: finding(
                                 names,
@@ -250,7 +257,7 @@ pub fn explain(
                 let (physics, mut summary, parameters, curve) =
                     linear_change(nominal, &f, orders, i, modelled, ts, names);
                 summary += &at_the_bound(physics, orders, i, longest);
-                summary += &drift_text;
+                summary += &drift_note(&m, &f, d, names.output);
                 tried.push(Tried {
                     physics,
                     score_vs_null: None,
@@ -301,7 +308,12 @@ pub fn explain(
             lv.min_gain_over(&nominal_cv),
         ),
         _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
-    } + &drift_text;
+    } + &match drift_gain.filter(|_| drift) {
+        Some(g) => format!(
+            "; every structure tried carried a drift term, a straight line in time that no input explains (with one, the re-fitted linear model gains {g:+.1} points)"
+        ),
+        None => String::new(),
+    };
     let i = flagged.first().copied().unwrap_or(0);
     let withheld = !withheld.is_empty();
     Explanation {
@@ -312,18 +324,14 @@ pub fn explain(
     }
 }
 
-/// The sentence a finding carries when the structures were fitted beside a drift: the drift
-/// over the training rows, read as the straight line the nominal's simulation error follows
-/// there.
-fn drift_note(s: &[f64], d: &Data<'_>, output: &str) -> String {
-    let rows: Vec<usize> = d.train.clone().collect();
-    let e: Vec<f64> = d.y.iter().zip(s).map(|(y, s)| y - s).collect();
-    let ones = vec![1.0; e.len()];
-    let time: Vec<f64> = (0..e.len()).map(|t| t as f64 / TREND_UNIT).collect();
-    let Some(c) = least_squares_rows(&[&ones, &time], &e, &rows) else { return String::new() };
-    let over = c[1] * rows.len() as f64 / TREND_UNIT;
+/// The sentence a finding carries when its structure was fitted beside a drift: the drift
+/// over the training rows at steady state, `δ / (1 − Σα)` per [`super::TREND_UNIT`] samples. Empty
+/// without one.
+fn drift_note(m: &Model<'_>, f: &Fitted, d: &Data<'_>, output: &str) -> String {
+    let Some(per_sample) = m.drift_per_sample(f) else { return String::new() };
+    let over = per_sample * d.train.len() as f64;
     format!(
-        "; every structure was fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time)",
+        "; fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time)",
         if over >= 0.0 { "+" } else { "" },
         num(over)
     )

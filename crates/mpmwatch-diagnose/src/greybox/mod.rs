@@ -406,6 +406,18 @@ impl Model<'_> {
             + 1
     }
 
+    /// The drift the fitted recursion carries at steady state, output units per sample:
+    /// `δ / (1 − Σα) / TREND_UNIT`. `None` without [`Orders::trend`] or at an integrator,
+    /// where a constant input already makes a ramp.
+    pub fn drift_per_sample(&self, f: &Fitted) -> Option<f64> {
+        if !self.orders.trend || f.theta.len() < 2 {
+            return None;
+        }
+        let delta = f.theta[f.theta.len() - 2];
+        let poles = 1.0 - f.theta[..self.orders.na.min(f.theta.len())].iter().sum::<f64>();
+        (poles.abs() > 1e-9).then(|| delta / poles / TREND_UNIT)
+    }
+
     /// Simulation of the output over the whole record, from the recorded output's first
     /// samples as initial conditions. `None` when it diverges.
     pub fn simulate(&self, f: &Fitted, u: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
@@ -585,7 +597,9 @@ pub fn elements() -> Vec<Box<dyn Element>> {
     ]
 }
 
-pub use cv::{Beside, CvScore, cv_fit, drifts, linear_orders, max_dead_time, nominal_cv_fit, starting_at};
+pub use cv::{
+    Beside, CvScore, cv_fit, drift_gain, linear_orders, max_dead_time, nominal_cv_fit, starting_at,
+};
 pub use explain::{Explanation, Names, explain};
 pub use linear::Linear;
 pub use structure::{FittedGreyBox, GreyBox, Structure};

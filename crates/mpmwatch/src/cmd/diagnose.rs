@@ -71,10 +71,11 @@ pub struct Args {
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().closed_loop_min_gain_pct)]
     closed_loop_min_gain: f64,
     /// Open loop: an output may drift in a way no input carries (a sensor's drift, a slow
-    /// unmeasured load). When a straight line in time, fitted beside the model's simulation on
-    /// held-back training data, raises its FIT by this many points on average and on every
-    /// block, every hypothesis and the model's reference carry a drift term, and the finding
-    /// says so. `inf` never fits one.
+    /// unmeasured load), and a drift bends every re-fit. When a straight line in time added to
+    /// the re-fitted linear model raises its FIT on held-back training data by this many points
+    /// on average, every hypothesis and the model's reference carry one, and the finding says
+    /// so. Without a drift, a disturbance with a time constant of 10 samples passes 1 point on
+    /// about one record in twenty, a slower one more often; `inf` never fits one.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().drift_min_gain_pct)]
     drift_min_gain: f64,
     /// How the MI matrix flags a channel. `family`: one test per element over every lag of
