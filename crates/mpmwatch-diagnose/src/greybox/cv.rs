@@ -1,7 +1,9 @@
 //! Blocked cross-validation of the grey-box structures in the currency of the held-out FIT:
 //! each validation block simulated by a model fitted on the other rows and scored against its
 //! own mean, with the one-step prediction error under the fit's noise model beside it (the
-//! ranking currency on a dithered record); and the linear re-fit's orders chosen that way.
+//! ranking currency on a dithered record); the linear re-fit's orders chosen that way; and
+//! whether the output drifts ([`drift_gain`]), with the nominal's reference then carrying the
+//! same line ([`Beside`]).
 
 use super::{Data, Linear, Model, Orders, TREND_UNIT, fit};
 use crate::fitness::fit_pct;
@@ -338,9 +340,9 @@ mod tests {
     /// above the 3 that 5 % expects. Slower disturbances read as a drift more often: within a
     /// block of 700 rows they are one. A false drift names nothing by itself: every structure
     /// and the nominal's reference then carry the same line (docs/diagnose-history.md, stop 51).
-    const NSEEDS: u64 = 60;
     #[test]
     fn a_drift_is_told_from_a_faster_disturbance() {
+        const NSEEDS: u64 = 60;
         use rand::{Rng, SeedableRng};
         let n = 2100;
         let folds = three_folds();

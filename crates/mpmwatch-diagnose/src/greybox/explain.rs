@@ -30,6 +30,14 @@
 //! When nothing is reported, the finding is `unexplained` and says why, each withheld
 //! correction in the order tried.
 //!
+//! Before any of it, on an open-loop record: when a drift term raises the re-fitted linear
+//! model's cross-validated FIT by the caller's drift margin ([`super::drift_gain`]), every
+//! structure carries one and the nominal's reference becomes the nominal plus a constant and
+//! a line fitted on each fold's fit rows ([`super::Beside::Drift`]), so a finding is credited
+//! with what it explains beside the drift and the level. The held-out FIT is still the raw
+//! record's against the user's nominal, so a reported correction's held-out gain includes the
+//! drift it extrapolates.
+//!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
 //! ([`CvScore::rank`]): [`NONLINEAR_MARGIN`] and [`PARSIMONY`] then count points of prediction
@@ -124,11 +132,11 @@ pub fn explain(
     // An output that drifts in a way no input carries: every structure and the nominal's
     // reference then carry the same nuisance, so that what a hypothesis is credited with is
     // what it explains beside it.
-    let drift_gain = match &linear {
+    let with_drift = match &linear {
         Some(l) if d.noise_order == 0 && drift_min_gain.is_finite() => drift_gain(d, folds, l),
         _ => None,
     };
-    let drift = drift_gain.is_some_and(|g| g >= drift_min_gain);
+    let drift = with_drift.is_some_and(|g| g >= drift_min_gain);
     let beside = if drift { Beside::Drift } else { Beside::Nothing };
     if drift {
         linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside), true);
@@ -308,7 +316,7 @@ pub fn explain(
             lv.min_gain_over(&nominal_cv),
         ),
         _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
-    } + &match drift_gain.filter(|_| drift) {
+    } + &match with_drift.filter(|_| drift) {
         Some(g) => format!(
             "; every structure tried carried a drift term, a straight line in time that no input explains (with one, the re-fitted linear model gains {g:+.1} points)"
         ),
@@ -324,12 +332,12 @@ pub fn explain(
     }
 }
 
-/// The sentence a finding carries when its structure was fitted beside a drift: the drift
-/// over the training rows at steady state, `δ / (1 − Σα)` per [`super::TREND_UNIT`] samples. Empty
-/// without one.
+/// The sentence a finding carries when its structure was fitted beside a drift: how much the
+/// drift term moves the simulated output over the training rows ([`Model::drift_over`]).
+/// Empty without one.
 fn drift_note(m: &Model<'_>, f: &Fitted, d: &Data<'_>, output: &str) -> String {
-    let Some(per_sample) = m.drift_per_sample(f) else { return String::new() };
-    let over = per_sample * d.train.len() as f64;
+    let rows: Vec<usize> = d.train.clone().collect();
+    let Some(over) = m.drift_over(f, &d.u, d.y, &rows) else { return String::new() };
     format!(
         "; fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time)",
         if over >= 0.0 { "+" } else { "" },
@@ -457,11 +465,16 @@ fn nominal_orders(nominal: &NominalArx, inputs: usize, longest: usize) -> Orders
     Orders { na, nb, nk, trend: false }
 }
 
-/// Free parameters of an element on the linear orders.
+/// Free parameters of an element on the linear orders, the drift term included.
 fn complexity(el: &dyn Element, d: &Data<'_>, i: usize, orders: &Orders) -> usize {
     let p = el.starts(d, i).into_iter().next().unwrap_or_default();
     let signals = el.signals(&p, &d.u, i).len();
-    p.len().saturating_sub(el.fixed()) + orders.na + signals * orders.nb + el.feedbacks() + 1
+    p.len().saturating_sub(el.fixed())
+        + orders.na
+        + signals * orders.nb
+        + el.feedbacks()
+        + usize::from(orders.trend)
+        + 1
 }
 
 /// Response of input `i` through the linear part of a fitted linear structure to a unit step

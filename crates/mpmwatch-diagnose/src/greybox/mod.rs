@@ -9,9 +9,12 @@
 //! (the inputs themselves for a linear model) and `f_m` the forces it feeds back:
 //!
 //! ```text
-//! x(t) = Σ_k α_k x(t−k) + Σ_s Σ_k β_sk w_s(t−nk_s−k) + Σ_m γ_m f_m(x(t−1), x(t−2)) + c
+//! x(t) = Σ_k α_k x(t−k) + Σ_s Σ_k β_sk w_s(t−nk_s−k) + Σ_m γ_m f_m(x(t−1), x(t−2)) [+ δ·t/1000] + c
 //! ŷ(t) = g(x(t))            (the element's output map; the identity for most)
 //! ```
+//!
+//! The drift term `δ` is a nuisance every structure carries when the output drifts in a way
+//! no input carries ([`Orders::trend`], decided by [`drift_gain`]).
 //!
 //! Fitting (see [`fit`]; the noise model in [`noise`]): least squares on the equation error
 //! gives the start (the recorded output stands in for `x` on the rows where the output map is
@@ -406,16 +409,24 @@ impl Model<'_> {
             + 1
     }
 
-    /// The drift the fitted recursion carries at steady state, output units per sample:
-    /// `δ / (1 − Σα) / TREND_UNIT`. `None` without [`Orders::trend`] or at an integrator,
-    /// where a constant input already makes a ramp.
-    pub fn drift_per_sample(&self, f: &Fitted) -> Option<f64> {
-        if !self.orders.trend || f.theta.len() < 2 {
+    /// How much the fitted drift term moves the simulated output over `rows`: the straight
+    /// line's rise (slope × rows) through the difference between the simulation as fitted
+    /// and with `δ` at 0. Read off the simulation, not off `δ / (1 − Σα)`, because an output
+    /// map (a clip, a sensor's bend) or a fed-back force changes what a drift of the linear
+    /// part does to the reading. `None` without [`Orders::trend`] or when either diverges.
+    pub fn drift_over(&self, f: &Fitted, u: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<f64> {
+        if !self.orders.trend || f.theta.len() < 2 || rows.len() < 2 {
             return None;
         }
-        let delta = f.theta[f.theta.len() - 2];
-        let poles = 1.0 - f.theta[..self.orders.na.min(f.theta.len())].iter().sum::<f64>();
-        (poles.abs() > 1e-9).then(|| delta / poles / TREND_UNIT)
+        let mut still = f.clone();
+        let k = still.theta.len() - 2;
+        still.theta[k] = 0.0;
+        let (with, without) = (self.simulate(f, u, y)?, self.simulate(&still, u, y)?);
+        let diff: Vec<f64> = with.iter().zip(&without).map(|(a, b)| a - b).collect();
+        let ones = vec![1.0; diff.len()];
+        let time: Vec<f64> = (0..diff.len()).map(|t| t as f64).collect();
+        let c = least_squares_rows(&[&ones, &time], &diff, rows)?;
+        Some(c[1] * rows.len() as f64)
     }
 
     /// Simulation of the output over the whole record, from the recorded output's first
@@ -650,11 +661,12 @@ mod tests {
         }
     }
 
-    /// A noise-free first-order plant `x(t) = 0.9 x(t−1) + 0.2 u(t−1)` read with a drift,
-    /// `y = x + 0.002·t`: then `y(t) = 0.9 y(t−1) + 0.2 u(t−1) + 0.0002·t + 0.0018` exactly, a
+    /// A noise-free first-order plant `x(t) = 0.9 x(t−1) + 0.3 u(t−1)` read with a drift,
+    /// `y = x + 0.002·t`: then `y(t) = 0.9 y(t−1) + 0.3 u(t−1) + 0.0002·t + 0.0018` exactly, a
     /// recursion the trend term holds (δ = 0.2 per thousand samples, c = 0.0018). Fitted on the
-    /// first 2100 rows, it simulates the 900 after them, beyond every row it saw, to the
-    /// optimiser's tolerance; without the trend the same structure cannot follow the drift.
+    /// first 2100 rows, every coefficient is recovered and the 900 rows after them, beyond
+    /// every row it saw, are simulated to the optimiser's tolerance; the drift read off the
+    /// simulation is 0.002 a sample. Without the trend the same structure cannot follow.
     #[test]
     fn a_trend_term_carries_a_drift_beyond_the_fit_rows() {
         let n = 3000;
@@ -662,21 +674,29 @@ mod tests {
         let mut y = vec![0.0; n];
         let mut x = 0.0;
         for t in 1..n {
-            x = 0.9 * x + 0.2 * u[t - 1];
+            x = 0.9 * x + 0.3 * u[t - 1];
             y[t] = x + 0.002 * t as f64;
         }
         let d = Data { u: vec![&u], y: &y, train: 0..2100, nominal: None, noise_order: 0 };
         let rows: Vec<usize> = (10..2100).collect();
-        let sim = |trend: bool| {
-            let m = Model { element: &Linear, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend } };
-            let f = fit(&m, &d, &rows).unwrap();
-            (m.simulate(&f, &d.u, &y).unwrap(), f)
+        let model = |trend: bool| Model {
+            element: &Linear,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend },
         };
-        let (with, f) = sim(true);
+        let m = model(true);
+        let f = fit(&m, &d, &rows).unwrap();
+        let with = m.simulate(&f, &d.u, &y).unwrap();
         assert!(fit_pct(&y[2100..], &with[2100..]) > 99.9, "{f:?}");
-        assert!((f.theta[0] - 0.9).abs() < 1e-3 && (f.theta[2] - 0.2).abs() < 1e-3, "{f:?}");
-        let (without, _) = sim(false);
+        let want = [0.9, 0.3, 0.2, 0.0018];
+        assert!(f.theta.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-3), "{f:?}");
+        let drift = m.drift_over(&f, &d.u, &y, &rows).unwrap();
+        assert!((drift / rows.len() as f64 - 0.002).abs() < 1e-5, "{drift}");
+        let m = model(false);
+        let f = fit(&m, &d, &rows).unwrap();
+        let without = m.simulate(&f, &d.u, &y).unwrap();
         assert!(fit_pct(&y[2100..], &without[2100..]) < 99.0);
+        assert_eq!(m.drift_over(&f, &d.u, &y, &rows), None);
     }
 
     /// Where each element with a kink acts, counted on a ramp of 100 samples from 0 to 0.99

@@ -19,7 +19,8 @@
 //! sensor's resolution); a sixth, `DRIFT=top`, adds a ramp of up to `top` standard deviations
 //! over the record, either way (a drift no input carries; one draw per seed, shared by the
 //! classes). Both come before the nominal is fitted, and can be combined with the others (the
-//! drift before the steps).
+//! drift before the steps). `DRIFT_GAIN=points` sets the diagnosis's `drift_min_gain_pct`
+//! (`inf`: never fit a drift, the diagnosis before stop 51).
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
