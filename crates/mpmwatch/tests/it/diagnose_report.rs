@@ -124,6 +124,7 @@ fn report_json_matches_design_4_5() {
         (Some("family"), Some(0.01), Some(1))
     );
     assert_eq!((s["min_gain_pct"].as_f64(), s["closed_loop_min_gain_pct"].as_f64()), (Some(0.5), Some(2.0)));
+    assert_eq!(s["drift_min_gain_pct"].as_f64(), Some(1.0));
     let h = &v["holdout"];
     assert_eq!(h["start_index"], 1400);
     assert!(h["fit_before_pct"]["y1"].is_f64() && h["fit_after_pct"]["y1"].is_f64());
