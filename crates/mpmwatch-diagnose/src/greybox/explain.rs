@@ -681,6 +681,26 @@ mod tests {
         assert_eq!(rise(&[0.0, 0.0, 1.0]), (2, 0.5));
     }
 
+    /// The settling tests' input: a staircase of 1500 rows between −1 and 1.
+    fn staircase() -> Vec<f64> {
+        (0..1500).map(|t| ((t / 37 * 7919) % 41) as f64 / 20.0 - 1.0).collect()
+    }
+
+    /// `y` explained against the settling tests' nominal, `s(t) = 0.9 s(t−1) + 0.1 u(t−1)`
+    /// driven by `u`: the first 1050 rows train, in three blocks of 350; gate margin half a
+    /// point, drift margin one point (the defaults), unit sample time.
+    fn against_the_settling_nominal(u: &[f64], y: &[f64]) -> Explanation {
+        let model = nominal(vec![1.0, -0.9], vec![vec![0.0, 0.1]]);
+        let s = model.simulate(&[u]);
+        let train = 0..1050;
+        let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> = (0..3)
+            .map(|k| (train.clone().filter(|t| t / 350 != k).collect(), k * 350..(k + 1) * 350))
+            .collect();
+        let names = Names { inputs: vec!["u"], output: "y" };
+        let d = Data { u: vec![u], y, train, nominal: Some(&s), noise_order: 0 };
+        explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, 1.0, &names)
+    }
+
     /// The settling rule, both ways. A noise-free first-order plant of unit gain on a
     /// staircase, the nominal `s(t) = 0.9 s(t−1) + 0.1 u(t−1)` (time constant 9.5 samples),
     /// 1500 rows of which 1050 train in three blocks of 350, the first scored from its third row
@@ -690,26 +710,15 @@ mod tests {
     /// withheld as `unexplained` with its time constant.
     #[test]
     fn a_correction_slower_than_a_validation_block_is_withheld() {
-        let n = 1500;
-        let u: Vec<f64> = (0..n).map(|t| ((t / 37 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
+        let u = staircase();
         let first_order = |a: f64| {
-            let mut y = vec![0.0; n];
-            for t in 1..n {
+            let mut y = vec![0.0; u.len()];
+            for t in 1..u.len() {
                 y[t] = a * y[t - 1] + (1.0 - a) * u[t - 1];
             }
             y
         };
-        let model = nominal(vec![1.0, -0.9], vec![vec![0.0, 0.1]]);
-        let s = model.simulate(&[&u]);
-        let train = 0..1050;
-        let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> = (0..3)
-            .map(|k| (train.clone().filter(|t| t / 350 != k).collect(), k * 350..(k + 1) * 350))
-            .collect();
-        let names = Names { inputs: vec!["u"], output: "y" };
-        let explained = |y: &[f64]| {
-            let d = Data { u: vec![&u], y, train: train.clone(), nominal: Some(&s), noise_order: 0 };
-            explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, 1.0, &names)
-        };
+        let explained = |y: &[f64]| against_the_settling_nominal(&u, y);
 
         let fast = explained(&first_order(0.95));
         assert!(!fast.withheld);
@@ -744,23 +753,15 @@ mod tests {
     /// the best re-fit that settles is not built (docs/diagnose-history.md, stop 51).
     #[test]
     fn a_ramp_held_by_an_integrator_pole_is_withheld() {
-        let n = 1500;
-        let u: Vec<f64> = (0..n).map(|t| ((t / 37 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
+        let u = staircase();
+        let n = u.len();
         let mut y = vec![0.0; n];
         let mut x = 0.0;
         for t in 1..n {
             x = 0.95 * x + 0.05 * u[t - 1];
             y[t] = x + 0.3 * t as f64 / n as f64;
         }
-        let model = nominal(vec![1.0, -0.9], vec![vec![0.0, 0.1]]);
-        let s = model.simulate(&[&u]);
-        let train = 0..1050;
-        let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> = (0..3)
-            .map(|k| (train.clone().filter(|t| t / 350 != k).collect(), k * 350..(k + 1) * 350))
-            .collect();
-        let names = Names { inputs: vec!["u"], output: "y" };
-        let d = Data { u: vec![&u], y: &y, train: train.clone(), nominal: Some(&s), noise_order: 0 };
-        let e = explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, 1.0, &names);
+        let e = against_the_settling_nominal(&u, &y);
         assert!(e.withheld && e.corrected.is_none());
         assert_eq!(e.finding.physics, Physics::Unexplained, "{}", e.finding.summary);
         assert!(e.finding.summary.contains("infinite (an integrator or unstable)"), "{}", e.finding.summary);
