@@ -34,9 +34,10 @@
 //! model's cross-validated FIT by the caller's drift margin ([`super::drift_gain`]), every
 //! structure carries one and the nominal's reference becomes the nominal plus a constant and
 //! a line fitted on each fold's fit rows ([`super::Beside::Drift`]), so a finding is credited
-//! with what it explains beside the drift and the level. The held-out FIT is still the raw
-//! record's against the user's nominal, so a reported correction's held-out gain includes the
-//! drift it extrapolates.
+//! with what it explains beside the drift and the level. A drift no input carries cannot be
+//! forecast: the reported correction holds it, past the training part, at the level it reached
+//! there ([`Model::simulate_held`]), so the held-out tail is not credited with a line
+//! extrapolated into it (nor charged for one that turned).
 //!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
@@ -224,7 +225,7 @@ pub fn explain(
             let settles = tau < block;
             if !settles {
                 withheld.push(held(el.physics(), Why::Slow(tau), v));
-            } else if let Some(sim) = m.simulate(&f, &d.u, d.y) {
+            } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
                 let share = m.acting_share(&f, &d.u, &sim, &train_rows);
                 match share.filter(|&s| s.is_nan() || s < MIN_ACTING) {
                     Some(share) => withheld.push(held(el.physics(), Why::Idle(share), v)),
@@ -259,7 +260,7 @@ pub fn explain(
             let settles = tau < block;
             if !settles {
                 withheld.push(held(Physics::Unexplained, Why::Slow(tau), v));
-            } else if let Some(sim) = m.simulate(&f, &d.u, d.y) {
+            } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
                 let i = flagged.first().copied().unwrap_or(0);
                 let modelled = nominal.has_channel(i, d.u[i], s);
                 let (physics, mut summary, parameters, curve) =
@@ -333,13 +334,13 @@ pub fn explain(
 }
 
 /// The sentence a finding carries when its structure was fitted beside a drift: how much the
-/// drift term moves the simulated output over the training rows ([`Model::drift_over`]).
-/// Empty without one.
+/// drift term moves the simulated output over the training rows ([`Model::drift_over`]), and
+/// that it is held after them ([`Model::simulate_held`]). Empty without one.
 fn drift_note(m: &Model<'_>, f: &Fitted, d: &Data<'_>, output: &str) -> String {
     let rows: Vec<usize> = d.train.clone().collect();
     let Some(over) = m.drift_over(f, &d.u, d.y, &rows) else { return String::new() };
     format!(
-        "; fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time)",
+        "; fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time, held at the level it reached there after it)",
         if over >= 0.0 { "+" } else { "" },
         num(over)
     )

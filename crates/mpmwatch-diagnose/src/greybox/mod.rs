@@ -32,6 +32,7 @@ mod bilinear;
 mod clip_sensor;
 mod cv;
 mod dead_zone;
+mod draining_tank;
 mod explain;
 mod friction;
 mod linear;
@@ -432,6 +433,15 @@ impl Model<'_> {
     /// Simulation of the output over the whole record, from the recorded output's first
     /// samples as initial conditions. `None` when it diverges.
     pub fn simulate(&self, f: &Fitted, u: &[&[f64]], y: &[f64]) -> Option<Vec<f64>> {
+        self.simulate_held(f, u, y, usize::MAX)
+    }
+
+    /// [`Model::simulate`] with the drift term held after row `last` at the value it has
+    /// there. A drift no input carries cannot be forecast: the corrected simulation of the
+    /// held-out tail keeps the level the drift reached by the end of the training part rather
+    /// than extrapolating its line (the forecast of a random walk). Without [`Orders::trend`]
+    /// the same as [`Model::simulate`].
+    pub fn simulate_held(&self, f: &Fitted, u: &[&[f64]], y: &[f64], last: usize) -> Option<Vec<f64>> {
         // An optimiser step may leave a parameter non-finite; the maps (a clamp) must not see it.
         if f.p.iter().chain(&f.theta).any(|v| !v.is_finite()) {
             return None;
@@ -449,7 +459,7 @@ impl Model<'_> {
         let mut fb = Vec::with_capacity(nf);
         let drift = if o.trend { f.theta[f.theta.len() - 2] } else { 0.0 };
         for t in first..n {
-            let mut v = f.theta[f.theta.len() - 1] + drift * t as f64 / TREND_UNIT;
+            let mut v = f.theta[f.theta.len() - 1] + drift * t.min(last) as f64 / TREND_UNIT;
             for k in 1..=o.na {
                 v += f.theta[k - 1] * x[t - k];
             }
@@ -595,6 +605,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(dead_zone::DeadZone),
         Box::new(saturation::InputSaturation),
         Box::new(storage_limit::StorageLimit),
+        Box::new(draining_tank::DrainingTank),
         Box::new(clip_sensor::ClipSensor),
         Box::new(abs_sensor::AbsSensor),
         Box::new(sensor_polynomial::SensorPolynomial),
@@ -666,9 +677,10 @@ mod tests {
     /// recursion the trend term holds (δ = 0.2 per thousand samples, c = 0.0018). Fitted on the
     /// first 2100 rows, every coefficient is recovered and the 900 rows after them, beyond
     /// every row it saw, are simulated to the optimiser's tolerance; the drift read off the
-    /// simulation is 0.002 a sample. Without the trend the same structure cannot follow.
+    /// simulation is 0.002 a sample, and held after the training rows it stops. Without the
+    /// trend the same structure cannot follow.
     #[test]
-    fn a_trend_term_carries_a_drift_beyond_the_fit_rows() {
+    fn a_trend_term_carries_a_drift_beyond_the_fit_rows_or_holds_it() {
         let n = 3000;
         let u: Vec<f64> = (0..n).map(|t| ((t / 23 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
         let mut y = vec![0.0; n];
@@ -692,6 +704,13 @@ mod tests {
         assert!(f.theta.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-3), "{f:?}");
         let drift = m.drift_over(&f, &d.u, &y, &rows).unwrap();
         assert!((drift / rows.len() as f64 - 0.002).abs() < 1e-5, "{drift}");
+        // Held after row 2099, the drift stops: the two simulations agree to that row, then
+        // part by what the line would have added through the pole, `0.002·(t − 2099) − 0.018`
+        // once settled (a ramp through `1/(1 − 0.9q⁻¹)` lags by 0.0002·0.9/0.1²), 1.782 at the
+        // last row; 0.05 covers the fitted coefficients' 1e-3 carried through `δ/(1 − α)`.
+        let held = m.simulate_held(&f, &d.u, &y, 2099).unwrap();
+        assert!(held[..2100] == with[..2100], "the two differ before row 2100");
+        assert!((with[n - 1] - held[n - 1] - 1.782).abs() < 0.05, "{}", with[n - 1] - held[n - 1]);
         let m = model(false);
         let f = fit(&m, &d, &rows).unwrap();
         let without = m.simulate(&f, &d.u, &y).unwrap();

@@ -74,7 +74,8 @@ pub struct Args {
     /// unmeasured load), and a drift bends every re-fit. When a straight line in time added to
     /// the re-fitted linear model raises its FIT on held-back training data by this many points
     /// on average, every hypothesis and the model's reference carry one, and the finding says
-    /// so. Without a drift, a disturbance with a time constant of 10 samples passes 1 point on
+    /// so; the corrected simulation holds the drift at its last training level over the
+    /// held-out tail (a drift cannot be forecast). Without a drift, a disturbance with a time constant of 10 samples passes 1 point on
     /// about one record in twenty, a slower one more often; `inf` never fits one.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().drift_min_gain_pct)]
     drift_min_gain: f64,
