@@ -74,7 +74,7 @@ impl Element for DrainingTank {
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
         let train = &d.u[i][d.train.clone()];
         let mean = train.iter().sum::<f64>() / train.len().max(1) as f64;
-        if !(mean > 0.0) {
+        if !mean.is_finite() || mean <= 0.0 {
             return Vec::new();
         }
         let mut out = Vec::new();
