@@ -36,8 +36,11 @@
 //! a line fitted on each fold's fit rows ([`super::Beside::Drift`]), so a finding is credited
 //! with what it explains beside the drift and the level. A drift no input carries cannot be
 //! forecast: the reported correction holds it, past the training part, at the level it reached
-//! there ([`Model::simulate_held`]), so the held-out tail is not credited with a line
-//! extrapolated into it (nor charged for one that turned).
+//! there ([`Model::simulate_held`]), so the held-out tail (the raw record's FIT, against the
+//! user's nominal) is not credited with a line extrapolated into it. The choice still scores
+//! the line extrapolated over the outer validation blocks: holding it there too named more
+//! drifting records on development but let a tank fall by 264 points
+//! (docs/diagnose-history.md, stop 52).
 //!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
