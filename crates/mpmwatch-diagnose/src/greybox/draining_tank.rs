@@ -19,9 +19,9 @@ use crate::candidates::{ActsOn, Physics};
 /// reads). Tried only on an input that never goes negative on the training rows: an inflow.
 pub struct DrainingTank;
 
-/// Euler steps per sample. The store's pole per step is `1 − 1/(4τ)`, `τ = 2√h/k` its time
-/// constant in samples: with four steps it stays positive for time constants down to a quarter
-/// of a sample, where one step per sample would oscillate below one sample.
+/// Euler steps per sample. With `τ = 2√h/k` the store's time constant in samples, its pole per
+/// step is `1 − 1/(4τ)` with four steps, positive down to τ = ¼ sample; with one step a sample
+/// it would be `1 − 1/τ`, negative (an oscillating level) for any τ under a sample.
 const SUBSTEPS: usize = 4;
 
 /// Time constants (samples) at the mean inflow tried as starts, from a few samples to several
