@@ -343,7 +343,7 @@ fn drift_note(m: &Model<'_>, f: &Fitted, d: &Data<'_>, output: &str) -> String {
     let rows: Vec<usize> = d.train.clone().collect();
     let Some(over) = m.drift_over(f, &d.u, d.y, &rows) else { return String::new() };
     format!(
-        "; fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time, held at the level it reached there after it)",
+        "; fitted beside a drift of {output} that no input explains ({}{} over the training part, a straight line in time; past the training part it is held at the level it reached)",
         if over >= 0.0 { "+" } else { "" },
         num(over)
     )

@@ -75,8 +75,9 @@ pub struct Args {
     /// the re-fitted linear model raises its FIT on held-back training data by this many points
     /// on average, every hypothesis and the model's reference carry one, and the finding says
     /// so; the corrected simulation holds the drift at its last training level over the
-    /// held-out tail (a drift cannot be forecast). Without a drift, a disturbance with a time constant of 10 samples passes 1 point on
-    /// about one record in twenty, a slower one more often; `inf` never fits one.
+    /// held-out tail (a drift cannot be forecast). Without a drift, a disturbance with a time
+    /// constant of 10 samples passes 1 point on about one record in twenty, a slower one more
+    /// often; `inf` never fits one.
     #[arg(long, value_name = "POINTS", default_value_t = DiagnoseOptions::default().drift_min_gain_pct)]
     drift_min_gain: f64,
     /// How the MI matrix flags a channel. `family`: one test per element over every lag of
