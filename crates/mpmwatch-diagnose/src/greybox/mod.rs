@@ -29,6 +29,7 @@
 mod abs_sensor;
 mod backlash;
 mod bilinear;
+mod cascaded_tanks;
 mod clip_sensor;
 mod cv;
 mod dead_zone;
@@ -606,6 +607,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(saturation::InputSaturation),
         Box::new(storage_limit::StorageLimit),
         Box::new(draining_tank::DrainingTank),
+        Box::new(cascaded_tanks::CascadedTanks),
         Box::new(clip_sensor::ClipSensor),
         Box::new(abs_sensor::AbsSensor),
         Box::new(sensor_polynomial::SensorPolynomial),
