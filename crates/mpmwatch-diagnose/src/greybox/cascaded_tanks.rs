@@ -150,6 +150,21 @@ mod tests {
         assert_eq!(CascadedTanks.map_at(&p, &[], 0.1), Some(1.0));
     }
 
+    /// The settling rule reads one pole per tank, `exp(−k²/(2ū))` (orifices 0.2 and 0.1 at a
+    /// mean inflow of 0.5: time constants of 25 and 100 samples), and the element acts where
+    /// the upper tank stands at its rim: on a held inflow of 0.5 past a rim of 4 (below the
+    /// unbounded level of 6.25) from the first sample on, below a rim of 7 nowhere.
+    #[test]
+    fn one_pole_per_tank_and_the_rim_acts_where_the_upper_tank_spills() {
+        let poles = CascadedTanks.poles(&[0.5, 0.2, 4.0, 0.1]);
+        assert!((poles[0] - (-1.0f64 / 25.0).exp()).abs() < 1e-12, "{poles:?}");
+        assert!((poles[1] - (-1.0f64 / 100.0).exp()).abs() < 1e-12, "{poles:?}");
+        let u = vec![0.5; 200];
+        let at = |rim: f64| CascadedTanks.acting(&[0.5, 0.2, rim, 0.1], &[&u], 0, &[]).unwrap();
+        assert!(at(4.0).iter().all(|&a| a));
+        assert!(at(7.0).iter().all(|&a| !a));
+    }
+
     /// A noise-free cascade (orifices 0.3 and 0.2, rim 4, so at most 0.6 flows on) read as
     /// `y(t) = 0.5·h₂(t−1) + 1`, on a staircase of inflows in [0.1, 1.3] whose high steps
     /// spill: the fit recovers both orifices, the rim and the linear coefficients (zero error

@@ -197,6 +197,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ("ced", real::ced),
             ("tclab", real::tclab),
             ("cascaded_tanks", real::tanks),
+            ("cascaded_tanks_arx", real::tanks_arx),
         ] {
             eprintln!("real recording: {name}");
             match f(&args.data, &opts, &fig) {
