@@ -98,8 +98,7 @@ enum Verb {
     /// residuals, on the training part, says which input→output channels are wrong. (2) Name.
     /// Open loop (no --excitations): each output is explained by grey-box structures, the
     /// nominal's linear dynamics re-estimated together with one physics element (dead zone,
-    /// saturation, polynomial, backlash on an input; on an inflow, a tank that drains and
-    /// overflows, alone or above a second one; |x| sensor, clip or square-law bend on the
+    /// saturation, polynomial, backlash on an input; |x| sensor, clip or square-law bend on the
     /// output; Coulomb friction or a cubic spring fed back), fitted by simulation error; a
     /// linear re-fit always competes. Closed loop: on each flagged channel every candidate
     /// physics (gain, time_constant, dead_time, missing_coupling, dead_zone, saturation,

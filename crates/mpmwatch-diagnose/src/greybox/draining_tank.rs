@@ -22,11 +22,11 @@ pub struct DrainingTank;
 /// Euler steps per sample. With `τ = 2√h/k` the store's time constant in samples, its pole per
 /// step is `1 − 1/(4τ)` with four steps, positive down to τ = ¼ sample; with one step a sample
 /// it would be `1 − 1/τ`, negative (an oscillating level) for any τ under a sample.
-pub(super) const SUBSTEPS: usize = 4;
+const SUBSTEPS: usize = 4;
 
 /// Time constants (samples) at the mean inflow tried as starts, from a few samples to several
 /// hundred: a tank is often the slowest thing in a plant.
-pub(super) const TAUS: [f64; 4] = [5.0, 25.0, 100.0, 400.0];
+const TAUS: [f64; 4] = [5.0, 25.0, 100.0, 400.0];
 
 /// The tank's level per sample, from `u` (negative inflows count as none); NaN throughout for
 /// an orifice or rim that is not positive, which is no tank (a simulation built on it is
@@ -37,20 +37,15 @@ fn levels(u: &[f64], k: f64, rim: f64) -> Vec<f64> {
     }
     let first = u.first().copied().unwrap_or(0.0).max(0.0);
     let mut h = (first / k).powi(2).min(rim);
+    let dt = 1.0 / SUBSTEPS as f64;
     u.iter()
         .map(|&v| {
             for _ in 0..SUBSTEPS {
-                h = drain(h, v, k, rim);
+                h = (h + dt * (v.max(0.0) - k * h.max(0.0).sqrt())).clamp(0.0, rim);
             }
             h
         })
         .collect()
-}
-
-/// One Euler step of [`SUBSTEPS`] per sample of a tank at level `h` filled at `inflow`
-/// (negative inflows count as none) and drained at `k·√h`, its level kept within `[0, rim]`.
-pub(super) fn drain(h: f64, inflow: f64, k: f64, rim: f64) -> f64 {
-    (h + (inflow.max(0.0) - k * h.max(0.0).sqrt()) / SUBSTEPS as f64).clamp(0.0, rim)
 }
 
 /// The outflow `k·√h` per sample.
@@ -60,7 +55,7 @@ fn outflow(u: &[f64], k: f64, rim: f64) -> Vec<f64> {
 
 /// The orifice coefficient whose time constant at inflow `u` is `tau` samples: the linearised
 /// store `dh/dt = −(k/(2√h*))·δh` at `h* = (u/k)²` decays at `k²/(2u)` per sample.
-pub(super) fn k_for(u: f64, tau: f64) -> f64 {
+fn k_for(u: f64, tau: f64) -> f64 {
     (2.0 * u / tau).sqrt()
 }
 

@@ -391,7 +391,7 @@ impl Why {
                 block,
             ),
             Why::Idle(share) => format!(
-                "its nonlinearity acts on {:.1} % of the training rows (a named one must act on {} %): its gain is its linear part's",
+                "the kink it is named for (a limit, a dead zone, a rim) acts on {:.1} % of the training rows (a named one must act on {} %)",
                 100.0 * share,
                 100.0 * MIN_ACTING,
             ),

@@ -29,7 +29,6 @@
 mod abs_sensor;
 mod backlash;
 mod bilinear;
-mod cascaded_tanks;
 mod clip_sensor;
 mod cv;
 mod dead_zone;
@@ -607,7 +606,6 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(saturation::InputSaturation),
         Box::new(storage_limit::StorageLimit),
         Box::new(draining_tank::DrainingTank),
-        Box::new(cascaded_tanks::CascadedTanks),
         Box::new(clip_sensor::ClipSensor),
         Box::new(abs_sensor::AbsSensor),
         Box::new(sensor_polynomial::SensorPolynomial),

@@ -231,9 +231,9 @@ pub(super) fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::
 }
 
 /// Cascaded tanks as a user with a linear model meets them, through the CSV verb's path (no
-/// physical model): an ARX(2,2,1) fitted by least squares on the estimation record, checked
-/// against the validation record, simulated from its first level and diagnosed with the
-/// casebook's settings (the last 30 % held out).
+/// physical model): an ARX(2,2,1) fitted by least squares on the estimation record, run on the
+/// validation record from its first level, which is diagnosed with the casebook's settings
+/// (the last 30 % held out).
 pub(super) fn tanks_arx(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     let p = data.join("cascaded_tanks/dataBenchmark.csv");
     let (h, c) = read_plain(&p)?;
