@@ -39,11 +39,16 @@ pub(super) fn read_plain(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f6
     Ok((header, cols))
 }
 
+/// Column `name` of a [`read_plain`] file; an error names the file when the column is missing
+/// or has no rows (every caller starts a simulation from its first value).
 pub(super) fn column(h: &[String], c: &[Vec<f64>], name: &str, path: &Path) -> anyhow::Result<Vec<f64>> {
-    h.iter()
+    let col = h
+        .iter()
         .position(|n| n == name)
         .map(|k| c[k].clone())
-        .with_context(|| format!("{} has no column `{name}`", path.display()))
+        .with_context(|| format!("{} has no column `{name}`", path.display()))?;
+    anyhow::ensure!(!col.is_empty(), "{}: column `{name}` has no rows", path.display());
+    Ok(col)
 }
 
 /// A linear ARX(na, nb) model with a constant and a dead time, fitted by least squares on
@@ -144,6 +149,12 @@ pub(super) fn silverbox(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyh
     let p = data.join("silverbox/SNLS80mV.csv");
     let (h, c) = read_plain(&p)?;
     let (v1, v2) = (column(&h, &c, "V1", &p)?, column(&h, &c, "V2", &p)?);
+    anyhow::ensure!(
+        v1.len().min(v2.len()) >= 40_000,
+        "{}: {} rows, where the arrow head takes the first 40 000",
+        p.display(),
+        v1.len().min(v2.len())
+    );
     let (u_all, y_all) = (&v1[..40_000], &v2[..40_000]);
     let s_all = arx_simulation(u_all, y_all, 2, 3, 0, 2_000..10_000)?;
     let w = 30_000..40_000;
@@ -253,4 +264,26 @@ pub(super) fn tanks_arx(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyh
         opts,
         fig,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file with a header and no rows, or without the column asked for, is an error naming
+    /// the file and the column, not a panic on the first sample.
+    #[test]
+    fn a_missing_or_empty_column_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("empty.csv");
+        std::fs::write(&p, "\"uEst\",\"yEst\"\n\n").unwrap();
+        let (h, c) = read_plain(&p).unwrap();
+        let e = column(&h, &c, "yEst", &p).unwrap_err().to_string();
+        assert!(e.contains("empty.csv") && e.contains("`yEst` has no rows"), "{e}");
+        let e = column(&h, &c, "uVal", &p).unwrap_err().to_string();
+        assert!(e.contains("has no column `uVal`"), "{e}");
+        std::fs::write(&p, "uEst,yEst\n1,2\n").unwrap();
+        let (h, c) = read_plain(&p).unwrap();
+        assert_eq!(column(&h, &c, "yEst", &p).unwrap(), vec![2.0]);
+    }
 }
