@@ -5,7 +5,7 @@
 //! whether the output drifts ([`drift_gain`]), with the nominal's reference then carrying the
 //! same line ([`Beside`]).
 
-use super::{Data, Linear, Model, Orders, TREND_UNIT, fit};
+use super::{Data, Linear, Model, Orders, Reading, TREND_UNIT, fit};
 use crate::fitness::fit_pct;
 use crate::whiten::{ar_fit, whitened};
 use mpmwatch_core::numerics::least_squares_rows;
@@ -118,7 +118,8 @@ pub enum Beside {
 }
 
 /// The nominal's FIT over the same validation blocks, scored as [`cv_fit`] scores, with what
-/// `beside` adds to it; its prediction error under an AR model of order `noise_order` of its
+/// `beside` adds to it, read through the instrument's range `reading` when there is one; its
+/// prediction error under an AR model of order `noise_order` of its
 /// simulation error, fitted on each fold's fit rows (none for 0).
 pub fn nominal_cv_fit(
     s: &[f64],
@@ -126,6 +127,7 @@ pub fn nominal_cv_fit(
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
     noise_order: usize,
     beside: Beside,
+    reading: Option<Reading>,
 ) -> CvScore {
     let e: Vec<f64> = s.iter().zip(y).map(|(a, b)| a - b).collect();
     let ones = vec![1.0; y.len()];
@@ -139,8 +141,10 @@ pub fn nominal_cv_fit(
         let coef = if cols.is_empty() { Some(Vec::new()) } else { least_squares_rows(&cols, &e, fit_rows) };
         // A fold whose rows cannot place a line keeps the nominal as it is.
         let coef = coef.unwrap_or_else(|| vec![0.0; cols.len()]);
-        let sb: Vec<f64> =
-            (0..y.len()).map(|t| s[t] - cols.iter().zip(&coef).map(|(c, k)| c[t] * k).sum::<f64>()).collect();
+        let read = |v: f64| reading.map_or(v, |r| r.read(v));
+        let sb: Vec<f64> = (0..y.len())
+            .map(|t| read(s[t] - cols.iter().zip(&coef).map(|(c, k)| c[t] * k).sum::<f64>()))
+            .collect();
         let eb: Vec<f64> = sb.iter().zip(y).map(|(a, b)| a - b).collect();
         blocks.push(fit_pct(&y[b.clone()], &sb[b.clone()]));
         let a = ar_fit(&eb, fit_rows, noise_order).unwrap_or_default();
@@ -213,7 +217,7 @@ pub fn linear_orders(
     let mut nk = vec![1usize; d.u.len()];
     for i in 0..d.u.len() {
         let error_at = |k: usize, nk: &[usize], rows: &[usize]| -> f64 {
-            let mut o = Orders { na: 2, nb: 2, nk: nk.to_vec(), trend };
+            let mut o = Orders { na: 2, nb: 2, nk: nk.to_vec(), trend, reading: None };
             o.nk[i] = k;
             sim_err(&o, rows)
         };
@@ -246,7 +250,7 @@ pub fn linear_orders(
     let mut best: Option<(Orders, CvScore)> = None;
     for na in 1..=3 {
         for nb in 1..=3 {
-            let orders = Orders { na, nb, nk: nk.clone(), trend };
+            let orders = Orders { na, nb, nk: nk.clone(), trend, reading: None };
             let m = Model { element: &lin, input: 0, orders: orders.clone() };
             let Some(v) = cv_fit(&m, d, folds) else { continue };
             // One more pole or tap must earn a tenth of a point (of FIT, or of prediction gain).
@@ -354,7 +358,7 @@ mod tests {
         let uniform = |rng: &mut rand_chacha::ChaCha8Rng| (rng.random::<f64>() - 0.5) * 12f64.sqrt();
         let gain = |y: &[f64]| {
             let d = Data { u: vec![&u], y, train: 0..n, nominal: None, noise_order: 0 };
-            let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false };
+            let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
             let v =
                 cv_fit(&Model { element: &Linear, input: 0, orders: orders.clone() }, &d, &folds).unwrap();
             drift_gain(&d, &folds, &(orders, v)).unwrap()
@@ -395,7 +399,7 @@ mod tests {
         let s: Vec<f64> = (0..60).map(|t| (t / 20) as f64 * 10.0).collect();
         let folds: Vec<(Vec<usize>, std::ops::Range<usize>)> =
             (0..3).map(|k| (Vec::new(), 20 * k..20 * (k + 1))).collect();
-        let score = nominal_cv_fit(&s, &y, &folds, 0, Beside::Nothing);
+        let score = nominal_cv_fit(&s, &y, &folds, 0, Beside::Nothing, None);
         assert_eq!(score.blocks, vec![0.0, 0.0, 0.0]);
         assert_eq!(score.mean, 0.0);
         assert!(fit_pct(&y, &s) > 80.0);
@@ -405,7 +409,7 @@ mod tests {
         // A constant block has no FIT (−∞ for any error) and is left out.
         let mut flat = y.clone();
         flat[20..40].iter_mut().for_each(|v| *v = 10.0);
-        assert_eq!(nominal_cv_fit(&s, &flat, &folds, 0, Beside::Nothing).blocks, vec![0.0, 0.0]);
+        assert_eq!(nominal_cv_fit(&s, &flat, &folds, 0, Beside::Nothing, None).blocks, vec![0.0, 0.0]);
         assert!(CvScore::of(Vec::new(), Vec::new()).mean.is_nan());
         // The prediction currency: per block the share of the base's RMS removed, averaged
         // (an output-error score's RMS is its simulation error's: ±1 about the levels here).

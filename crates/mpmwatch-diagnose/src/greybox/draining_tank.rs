@@ -188,7 +188,7 @@ mod tests {
         let m = Model {
             element: &DrainingTank,
             input: 0,
-            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
         };
         let rows: Vec<usize> = (10..1500).collect();
         let f = fit(&m, &d, &rows).unwrap();

@@ -42,6 +42,19 @@
 //! drifting records on development but let a tank fall by 264 points
 //! (docs/diagnose-history.md, stop 52).
 //!
+//! When the training rows show the output's instrument pinned at the end of its range (a
+//! pile-up at one extreme value, [`pinned`]), the range is a property of the record, as a
+//! drift is: every structure, the linear re-fit included, and the nominal's reference read
+//! through it, so that an element or a linear change is credited only with what it explains
+//! beside the range. A record that needs the range and one physics element (the cascaded
+//! tanks, whose level sensor stops at 10 V) is then fitted with both. When no element is
+//! named, the linear re-fit read through the range is one correction of two parts: what the
+//! range alone adds (the nominal read through it, against the nominal as it is) and what the
+//! linear change adds beside it. The larger names it: a linear change (a transport delay
+//! behind a pinned transmitter), or the range itself, a clip on the output, when the re-fit
+//! read through it passes the gate against the nominal as it is (a linear plant behind a
+//! pinned instrument, a clip the range reproduces).
+//!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
 //! ([`CvScore::rank`]): [`NONLINEAR_MARGIN`] and [`PARSIMONY`] then count points of prediction
@@ -51,9 +64,10 @@
 use crate::describe::num;
 use std::collections::BTreeMap;
 
+use super::clip_sensor::ClipSensor;
 use super::{
     Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, drift_gain, elements, fit,
-    linear_orders, max_dead_time, nominal_cv_fit, starting_at,
+    linear_orders, max_dead_time, nominal_cv_fit, pinned, starting_at,
 };
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
@@ -128,11 +142,24 @@ pub fn explain(
     names: &Names<'_>,
 ) -> Explanation {
     let longest = max_dead_time(folds);
+    // A range the output's instrument reads within, when the training rows show one (see the
+    // module's doc).
+    let reading = pinned(&d.y[d.train.clone()]);
     // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
     // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders are
     // the user's knowledge of the plant). The linear model competes at both.
     let mut linear =
-        linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, Beside::Nothing), false);
+        linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, Beside::Nothing, None), false);
+    // Read through the range, as every structure is scored, before it decides the drift.
+    let read = |l: Option<(Orders, CvScore)>, folds: &[(Vec<usize>, std::ops::Range<usize>)]| {
+        l.and_then(|(o, _)| {
+            let o = Orders { reading, ..o };
+            cv_fit(&Model { element: &Linear, input: 0, orders: o.clone() }, d, folds).map(|v| (o, v))
+        })
+    };
+    if reading.is_some() {
+        linear = read(linear, folds);
+    }
     // An output that drifts in a way no input carries: every structure and the nominal's
     // reference then carry the same nuisance, so that what a hypothesis is credited with is
     // what it explains beside it.
@@ -143,24 +170,27 @@ pub fn explain(
     let drift = with_drift.is_some_and(|g| g >= drift_min_gain);
     let beside = if drift { Beside::Drift } else { Beside::Nothing };
     if drift {
-        linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside), true);
+        linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside, None), true);
     }
-    let from_nominal = Orders { trend: drift, ..nominal_orders(nominal, d.u.len(), longest) };
+    let from_nominal = Orders { trend: drift, reading, ..nominal_orders(nominal, d.u.len(), longest) };
     // A simulation copies the record up to its longest dead time and taps, so those rows have no
     // error; every block is scored after them, or a long dead time would be credited with them
     // against the nominal.
     let reach = linear.iter().map(|l| &l.0).chain([&from_nominal]).map(|o| o.reach()).max().unwrap_or(0);
     let trimmed;
-    let folds = if folds.first().is_some_and(|f| f.1.start < reach) {
+    let trim = folds.first().is_some_and(|f| f.1.start < reach);
+    let folds = if trim {
         trimmed = starting_at(folds, reach);
-        linear = linear.and_then(|(o, _)| {
-            cv_fit(&Model { element: &Linear, input: 0, orders: o.clone() }, d, &trimmed).map(|v| (o, v))
-        });
         &trimmed[..]
     } else {
         folds
     };
-    let nominal_cv = nominal_cv_fit(s, d.y, folds, d.noise_order, beside);
+    // The orders were searched on the record as it is; the linear re-fit is scored as every
+    // structure is, after the rows a simulation copies and read through the range.
+    if trim || reading.is_some() {
+        linear = read(linear, folds);
+    }
+    let nominal_cv = nominal_cv_fit(s, d.y, folds, d.noise_order, beside, reading);
     // Candidates are ranked in the currency their fits were made in (see `CvScore::rank`); the
     // gate is always the plain FIT's.
     let rank = |v: &CvScore| v.rank(&nominal_cv, d.noise_order);
@@ -235,6 +265,7 @@ pub fn explain(
                     None => {
                         let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
                         summary += &drift_note(&m, &f, d, names.output);
+                        summary += &reading_note(reading, names.output);
                         return Explanation {
                             finding: finding(
                                 names,
@@ -254,8 +285,14 @@ pub fn explain(
             }
         }
     }
+    // With a range, what the range alone adds (the nominal read through it against the nominal
+    // as it is) and what the linear change adds beside it are two parts of one correction: the
+    // larger names it (the range, below).
+    let raw = reading.map(|_| nominal_cv_fit(s, d.y, folds, d.noise_order, beside, None));
+    let range_part = raw.as_ref().map_or(f64::NEG_INFINITY, |r| nominal_cv.mean - r.mean);
     if let Some((orders, v)) = &linear
         && passes(v)
+        && v.mean - nominal_cv.mean >= range_part
     {
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
         if let Some(f) = fit(&m, d, &train_rows) {
@@ -270,6 +307,7 @@ pub fn explain(
                     linear_change(nominal, &f, orders, i, modelled, ts, names);
                 summary += &at_the_bound(physics, orders, i, longest);
                 summary += &drift_note(&m, &f, d, names.output);
+                summary += &reading_note(reading, names.output);
                 tried.push(Tried {
                     physics,
                     score_vs_null: None,
@@ -281,6 +319,55 @@ pub fn explain(
                     curve: Some(curve),
                     withheld: false,
                 };
+            }
+        }
+    }
+    // The range alone: the linear re-fit read through it, against the nominal as it is.
+    if let (Some(r), Some(raw), Some((orders, _))) = (reading, raw, &linear) {
+        let el = ClipSensor { range: Some(r) };
+        let m = Model { element: &el, input: 0, orders: orders.clone() };
+        if let Some(v) = cv_fit(&m, d, folds)
+            && v.mean - raw.mean >= min_gain
+            && v.min_gain_over(&raw) >= 0.0
+            && let Some(f) = fit(&m, d, &train_rows)
+        {
+            let held = |why: Why| Withheld {
+                physics: Physics::Saturation,
+                why,
+                mean: v.mean - raw.mean,
+                worst: v.min_gain_over(&raw),
+            };
+            let tau = time_constant(&m, &f);
+            if tau >= block {
+                withheld.push(held(Why::Slow(tau)));
+            } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
+                let share = m.acting_share(&f, &d.u, &sim, &train_rows).unwrap_or(0.0);
+                if share.is_nan() || share < MIN_ACTING {
+                    withheld.push(held(Why::Idle(share)));
+                } else {
+                    let i = flagged.first().copied().unwrap_or(0);
+                    let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+                    summary += &drift_note(&m, &f, d, names.output);
+                    tried.push(Tried {
+                        physics: Physics::Saturation,
+                        score_vs_null: None,
+                        validation_gain_pct: v.mean - raw.mean,
+                    });
+                    return Explanation {
+                        finding: finding(
+                            names,
+                            i,
+                            Physics::Saturation,
+                            ActsOn::Output,
+                            summary,
+                            parameters,
+                            tried,
+                        ),
+                        corrected: Some(sim),
+                        curve: m.curve(&f, d, names.inputs[i], names.output),
+                        withheld: false,
+                    };
+                }
             }
         }
     }
@@ -325,7 +412,7 @@ pub fn explain(
             "; every structure tried carried a drift term, a straight line in time that no input explains (with one, the re-fitted linear model gains {g:+.1} points)"
         ),
         None => String::new(),
-    };
+    } + &reading_note(reading, names.output);
     let i = flagged.first().copied().unwrap_or(0);
     let withheld = !withheld.is_empty();
     Explanation {
@@ -347,6 +434,14 @@ fn drift_note(m: &Model<'_>, f: &Fitted, d: &Data<'_>, output: &str) -> String {
         if over >= 0.0 { "+" } else { "" },
         num(over)
     )
+}
+
+/// The sentence a finding carries when every structure, the nominal's reference included, was
+/// read through the instrument's range the record shows ([`pinned`]); empty without one.
+fn reading_note(reading: Option<super::Reading>, output: &str) -> String {
+    reading.map_or(String::new(), |r| {
+        format!("; every structure, and the nominal compared with them, read through the range the record shows: {}", r.describe(output))
+    })
 }
 
 /// A correction that passed the gate against the nominal and was not reported.
@@ -466,7 +561,7 @@ fn nominal_orders(nominal: &NominalArx, inputs: usize, longest: usize) -> Orders
             first.min(longest)
         })
         .collect();
-    Orders { na, nb, nk, trend: false }
+    Orders { na, nb, nk, trend: false, reading: None }
 }
 
 /// Free parameters of an element on the linear orders, the drift term included.
@@ -663,10 +758,16 @@ mod tests {
     #[test]
     fn nominal_orders_are_read_off_the_coefficients() {
         let n = nominal(vec![1.0, -1.5, 0.6], vec![vec![0.0, 1e-6, 0.4, 0.2], vec![0.3, 0.0, 0.0, 0.0]]);
-        assert_eq!(nominal_orders(&n, 2, 20), Orders { na: 2, nb: 2, nk: vec![2, 0], trend: false });
+        assert_eq!(
+            nominal_orders(&n, 2, 20),
+            Orders { na: 2, nb: 2, nk: vec![2, 0], trend: false, reading: None }
+        );
         // More than 3 poles or taps are capped; an all-zero numerator gives a tap at lag 0.
         let n = nominal(vec![1.0, -0.5, 0.1, 0.01, 0.001], vec![vec![0.1, 0.2, 0.3, 0.4, 0.5], vec![0.0; 5]]);
-        assert_eq!(nominal_orders(&n, 2, 20), Orders { na: 3, nb: 3, nk: vec![0, 0], trend: false });
+        assert_eq!(
+            nominal_orders(&n, 2, 20),
+            Orders { na: 3, nb: 3, nk: vec![0, 0], trend: false, reading: None }
+        );
     }
 
     /// A linear change is drawn as the two step responses: the model's (its own channel, as
@@ -803,7 +904,7 @@ mod tests {
 
         // The record's plant answers three samples later.
         let late = Fitted { p: vec![], theta: vec![0.8, 0.2, 0.0], noise: vec![] };
-        let orders = Orders { na: 1, nb: 1, nk: vec![4], trend: false };
+        let orders = Orders { na: 1, nb: 1, nk: vec![4], trend: false, reading: None };
         let (physics, summary, parameters, c) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
         assert!(!summary.contains("longest dead time"), "{summary}");
@@ -818,7 +919,7 @@ mod tests {
         }
 
         // A dead time at the search's bound is said to be one.
-        let orders = Orders { na: 1, nb: 1, nk: vec![40], trend: false };
+        let orders = Orders { na: 1, nb: 1, nk: vec![40], trend: false, reading: None };
         let (physics, ..) = linear_change(&model, &late, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::DeadTime);
         let note = at_the_bound(physics, &orders, 0, 40);
@@ -828,7 +929,7 @@ mod tests {
 
         // Twice the gain, the same timing.
         let strong = Fitted { p: vec![], theta: vec![0.8, 0.4, 0.0], noise: vec![] };
-        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false };
+        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
         let (physics, _, _, c) = linear_change(&model, &strong, &orders, 0, true, ts, &names);
         assert_eq!(physics, Physics::Gain);
         let (end_new, end_old) = (c.points.last().unwrap().1, c.baseline.last().unwrap().1);

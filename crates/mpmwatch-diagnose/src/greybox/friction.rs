@@ -91,7 +91,11 @@ mod tests {
     fn a_noise_free_sticking_friction_is_recovered() {
         let u: Vec<f64> = (0..1500).map(|t| ((t / 23 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
         let c = Coulomb { on_change: false };
-        let m = Model { element: &c, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
+        let m = Model {
+            element: &c,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
+        };
         let truth = Fitted { p: vec![0.0], theta: vec![0.8, 0.5, -0.1, 0.0], noise: Vec::new() };
         let y = m.simulate(&truth, &[&u], &vec![0.0; u.len()]).unwrap();
         let stuck = (1..u.len()).filter(|&t| y[t] == 0.0 && y[t - 1] == 0.0 && u[t - 1] != 0.0).count();

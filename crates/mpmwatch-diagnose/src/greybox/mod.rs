@@ -38,6 +38,7 @@ mod friction;
 mod linear;
 mod noise;
 mod polynomial;
+mod reading;
 mod saturation;
 mod sensor_polynomial;
 mod stiffness;
@@ -51,6 +52,7 @@ use crate::minimize::minimize;
 use super::candidates::{ActsOn, Physics};
 use mpmwatch_core::model::DiscreteTf;
 use mpmwatch_core::numerics::{least_squares_rows, median, quantile};
+pub use reading::{Reading, pinned};
 
 /// The record an element is fitted to: inputs, output and the training rows' summaries the
 /// elements start from.
@@ -314,6 +316,10 @@ pub struct Orders {
     pub nk: Vec<usize>,
     /// Whether the recursion carries a drift term.
     pub trend: bool,
+    /// The range the output's instrument reads within, when the record shows one
+    /// ([`reading::pinned`]): the simulated reading is held inside it after the element's own
+    /// output map.
+    pub reading: Option<Reading>,
 }
 
 /// Samples per unit of the drift term's time `τ(t) = t / TREND_UNIT`: a drift over a record of
@@ -485,9 +491,14 @@ impl Model<'_> {
         Some(
             x.iter()
                 .enumerate()
-                .map(|(t, &v)| if t < first { y[t] } else { self.element.output(&f.p, v) })
+                .map(|(t, &v)| if t < first { y[t] } else { self.read(self.element.output(&f.p, v)) })
                 .collect(),
         )
+    }
+
+    /// `v` as the output's instrument reads it ([`Orders::reading`]).
+    fn read(&self, v: f64) -> f64 {
+        self.orders.reading.map_or(v, |r| r.read(v))
     }
 
     /// The equation-error least-squares fit of the coefficients, the element's parameters
@@ -527,7 +538,12 @@ impl Model<'_> {
             cols.push((0..n).map(|t| t as f64 / TREND_UNIT).collect());
         }
         cols.push(vec![1.0; n]);
-        let ok = |t: usize| (0..=o.na).all(|k| t >= k && self.element.invertible(p, y[t - k]));
+        // A reading held at the instrument's range says only that the value is beyond it.
+        let ok = |t: usize| {
+            (0..=o.na).all(|k| {
+                t >= k && self.element.invertible(p, y[t - k]) && o.reading.is_none_or(|r| r.inside(y[t - k]))
+            })
+        };
         let used: Vec<usize> = rows.iter().copied().filter(|&t| t >= first && ok(t)).collect();
         if used.len() < 3 * cols.len() {
             return None;
@@ -606,7 +622,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(saturation::InputSaturation),
         Box::new(storage_limit::StorageLimit),
         Box::new(draining_tank::DrainingTank),
-        Box::new(clip_sensor::ClipSensor),
+        Box::new(clip_sensor::ClipSensor { range: None }),
         Box::new(abs_sensor::AbsSensor),
         Box::new(sensor_polynomial::SensorPolynomial),
         Box::new(polynomial::Polynomial { degree: 2 }),
@@ -650,7 +666,7 @@ mod tests {
             let m = Model {
                 element: &Linear,
                 input: 0,
-                orders: Orders { na: alpha.len(), nb: 1, nk: vec![1], trend: false },
+                orders: Orders { na: alpha.len(), nb: 1, nk: vec![1], trend: false, reading: None },
             };
             let mut theta = alpha.to_vec();
             theta.extend([0.5, 0.0]);
@@ -663,7 +679,7 @@ mod tests {
         let m = Model {
             element: &storage_limit::StorageLimit,
             input: 0,
-            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
         };
         for (store, want) in [(0.999, 0.999), (0.3, 0.5), (f64::NAN, f64::INFINITY)] {
             let f = Fitted { p: vec![store, -1.0, 1.0], theta: vec![0.5, 0.5, 0.0], noise: Vec::new() };
@@ -694,7 +710,7 @@ mod tests {
         let model = |trend: bool| Model {
             element: &Linear,
             input: 0,
-            orders: Orders { na: 1, nb: 1, nk: vec![1], trend },
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend, reading: None },
         };
         let m = model(true);
         let f = fit(&m, &d, &rows).unwrap();
@@ -732,14 +748,17 @@ mod tests {
         // The simulated reading as a clip returns it, the limit itself where it clips.
         let read: Vec<f64> = u.iter().map(|v| v.min(0.905)).collect();
         let share = |el: &dyn Element, p: Vec<f64>, rows: &[usize]| {
-            let m =
-                Model { element: el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
+            let m = Model {
+                element: el,
+                input: 0,
+                orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
+            };
             let f = Fitted { p, theta: vec![0.0, 1.0, 0.0], noise: Vec::new() };
             m.acting_share(&f, &[&u], &read, rows)
         };
         let sat = &saturation::InputSaturation;
         let store = &storage_limit::StorageLimit;
-        let (dz, clip) = (&dead_zone::DeadZone, &clip_sensor::ClipSensor);
+        let (dz, clip) = (&dead_zone::DeadZone, &clip_sensor::ClipSensor { range: None });
         assert_eq!(share(sat, vec![0.905, 0.205], &all), Some(0.3));
         assert_eq!(share(sat, vec![-1.0, 2.0], &all), Some(0.0));
         assert_eq!(share(sat, vec![0.205, 0.905], &all[..50]), Some(0.42));
@@ -768,7 +787,11 @@ mod tests {
         }
         let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None, noise_order: 0 };
         let el = dead_zone::DeadZone;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false } };
+        let m = Model {
+            element: &el,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false, reading: None },
+        };
         let rows: Vec<usize> = (10..1200).collect();
         let f = fit(&m, &d, &rows).unwrap();
         assert!((f.p[1].abs() - 0.3).abs() < 1e-3, "{f:?}");
@@ -793,7 +816,11 @@ mod tests {
         let u: Vec<f64> = (0..400).map(|t| ((t / 9 * 7919) % 41) as f64 / 20.0 - 1.0).collect();
         let d = Data { u: vec![&u], y: &u, train: 0..400, nominal: None, noise_order: 0 };
         let el = backlash::Backlash;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
+        let m = Model {
+            element: &el,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
+        };
         let f = Fitted { p: vec![0.4], theta: vec![0.8, 0.5, 0.0], noise: vec![] };
         let c = m.curve(&f, &d, "u", "y").expect("backlash has a loop");
         assert_eq!(c.points.len(), 401);
@@ -829,8 +856,11 @@ mod tests {
             }
             let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None, noise_order: 0 };
             let el = polynomial::Polynomial { degree };
-            let model =
-                Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false } };
+            let model = Model {
+                element: &el,
+                input: 0,
+                orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false, reading: None },
+            };
             let rows: Vec<usize> = (10..1200).collect();
             let f = fit(&model, &d, &rows).unwrap();
             let curve = model.curve(&f, &d, "u", "y").expect("a polynomial has a map");
@@ -864,8 +894,11 @@ mod tests {
         }
         let d = Data { u: vec![&u], y: &y, train: 0..800, nominal: None, noise_order: 0 };
         let el = polynomial::Polynomial { degree: 2 };
-        let model =
-            Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false } };
+        let model = Model {
+            element: &el,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![2], trend: false, reading: None },
+        };
         let rows: Vec<usize> = (10..800).collect();
         let f = fit(&model, &d, &rows).unwrap();
         let train_mean = u[..800].iter().sum::<f64>() / 800.0;
@@ -896,7 +929,11 @@ mod tests {
         }
         let y: Vec<f64> = x.iter().map(|v| v.abs()).collect();
         let el = abs_sensor::AbsSensor;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false } };
+        let m = Model {
+            element: &el,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
+        };
         let rows: Vec<usize> = (100..1500).collect();
         for nominal in [Some(&x[..]), None] {
             let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal, noise_order: 0 };
@@ -920,7 +957,11 @@ mod tests {
         }
         let d = Data { u: vec![&u], y: &y, train: 0..1500, nominal: None, noise_order: 0 };
         let el = stiffness::CubicStiffness;
-        let m = Model { element: &el, input: 0, orders: Orders { na: 2, nb: 1, nk: vec![1], trend: false } };
+        let m = Model {
+            element: &el,
+            input: 0,
+            orders: Orders { na: 2, nb: 1, nk: vec![1], trend: false, reading: None },
+        };
         let rows: Vec<usize> = (10..1500).collect();
         let f = fit(&m, &d, &rows).unwrap();
         let s = m.simulate(&f, &d.u, &y).unwrap();

@@ -83,7 +83,7 @@ mod tests {
             let m = Model {
                 element: &Linear,
                 input: 0,
-                orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+                orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
             };
             let gain_pole = |noise_order: usize| {
                 let d = Data { u: vec![&u], y: &y, train: 0..n, nominal: None, noise_order };

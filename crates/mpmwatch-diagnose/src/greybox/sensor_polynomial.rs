@@ -158,7 +158,7 @@ mod tests {
         let m = Model {
             element: &SensorPolynomial,
             input: 0,
-            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false },
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
         };
         // From row 60 the start of the simulation (the first readings taken as true values) has
         // decayed to 0.8^60 ≈ 2e-6 of the readings' bend.

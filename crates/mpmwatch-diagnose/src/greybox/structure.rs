@@ -27,7 +27,7 @@ impl Structure {
         match self {
             Structure::Linear => Box::new(super::Linear),
             Structure::CubicStiffness => Box::new(stiffness::CubicStiffness),
-            Structure::ClipSensor => Box::new(clip_sensor::ClipSensor),
+            Structure::ClipSensor => Box::new(clip_sensor::ClipSensor { range: None }),
             Structure::AbsSensor => Box::new(abs_sensor::AbsSensor),
             Structure::CoulombFriction => Box::new(friction::Coulomb { on_change: true }),
         }
@@ -72,7 +72,7 @@ impl GreyBox {
             ));
         }
         let element = self.structure.element();
-        let orders = Orders { na: self.na, nb: self.nb, nk: self.nk.clone(), trend: false };
+        let orders = Orders { na: self.na, nb: self.nb, nk: self.nk.clone(), trend: false, reading: None };
         let d = Data { u: u.to_vec(), y, train: rows.clone(), nominal: None, noise_order: 0 };
         let model = Model { element: element.as_ref(), input: 0, orders: orders.clone() };
         let idx: Vec<usize> = rows.collect();

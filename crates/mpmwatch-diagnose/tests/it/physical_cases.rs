@@ -3,7 +3,7 @@
 //! rises. Seeds 1–3 are the development seeds of docs/diagnose-history.md; the report seeds are
 //! measured by the ignored study, not here.
 
-use super::physical_study::{bent, diagnose_against, diagnose_record};
+use super::physical_study::{bent, diagnose_against, diagnose_record, pinned};
 use mpmwatch_diagnose::{ActsOn, Physics};
 use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, nominal_simulation, run};
 
@@ -58,6 +58,47 @@ fn a_bent_sensor_is_a_quadratic_on_the_output() {
         assert_eq!(f.parameters["curvature"].signum(), c.signum(), "bend {c}: {}", f.summary);
         let h = &d.report.holdout;
         assert!(h.fit_after_pct["y1"] > h.fit_before_pct["y1"], "bend {c}: {h:?}");
+    }
+}
+
+/// An instrument whose range ends at the recorded output's 95 % quantile, every reading
+/// beyond it that end exactly (the study's `PIN` shift), on the top or the bottom. Against an
+/// exact model of the linear plant (its noise-free output as the simulation) the range is all
+/// the model left out: named a clip on the output at that end, no limit fitted. An actuator
+/// dead zone against its least-squares nominal keeps its name, fitted read through the range.
+/// Each raises the held-out FIT. Seed 1 as the other cases here.
+#[test]
+fn a_pinned_instrument_is_read_through_its_range() {
+    let cases = [
+        (PhysicalCase::Linear, true, Physics::Saturation),
+        (PhysicalCase::Linear, false, Physics::Saturation),
+        (PhysicalCase::ActuatorDeadZone, true, Physics::DeadZone),
+    ];
+    for (case, top, want) in cases {
+        let r = pinned(run(case, 3000, 1).unwrap(), 0.95, top);
+        let end = if top {
+            r.y.iter().copied().fold(f64::MIN, f64::max)
+        } else {
+            r.y.iter().copied().fold(f64::MAX, f64::min)
+        };
+        let d = if want == Physics::Saturation {
+            diagnose_against(&r, &r.plant)
+        } else {
+            diagnose_against(&r, &nominal_simulation(&r.u, &r.y).unwrap())
+        };
+        let f = d.report.findings.iter().find(|f| f.physics != Physics::Unexplained);
+        let f = f.unwrap_or_else(|| panic!("{case:?} top {top}: no finding: {:?}", d.report.findings));
+        assert_eq!(f.physics, want, "{case:?} top {top}: {}", f.summary);
+        if want == Physics::Saturation {
+            assert_eq!(f.acts_on, ActsOn::Output, "{case:?} top {top}: {}", f.summary);
+            let side = if top { "upper" } else { "lower" };
+            assert_eq!(f.parameters.get(side), Some(&end), "{case:?} top {top}: {:?}", f.parameters);
+            assert_eq!(f.parameters.len(), 1, "{case:?} top {top}: {:?}", f.parameters);
+        } else {
+            assert!(f.summary.contains("read through the range the record shows"), "{}", f.summary);
+        }
+        let h = &d.report.holdout;
+        assert!(h.fit_after_pct["y1"] > h.fit_before_pct["y1"], "{case:?} top {top}: {h:?}");
     }
 }
 

@@ -20,7 +20,12 @@
 //! over the record, either way (a drift no input carries; one draw per seed, shared by the
 //! classes). Both come before the nominal is fitted, and can be combined with the others (the
 //! drift before the steps). `DRIFT_GAIN=points` sets the diagnosis's `drift_min_gain_pct`
-//! (`inf`: never fit a drift, the diagnosis before stop 51).
+//! (`inf`: never fit a drift, the diagnosis before stop 51). A seventh, `PIN=lo,hi`, reads the
+//! recorded output through an instrument whose range ends at the output's `q` quantile, `q`
+//! drawn in `lo..hi` on the top or the bottom, either at random (seeded by the case's seed):
+//! every reading beyond it is that end exactly, as a transmitter at the end of its span reads.
+//! It comes last, after the noise, the drift and the steps. A linear plant is then also named
+//! right as a clip on the output (`saturation (output)`), the range it is read through.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
@@ -154,12 +159,38 @@ fn drifting(mut r: PhysicalRecord, share: f64) -> PhysicalRecord {
     r
 }
 
+/// `r` read through an instrument whose range ends at the recorded output's `q` quantile, on
+/// the top (`top`) or the bottom: every reading beyond it is that end exactly. The nominal is
+/// left as it was, for the caller to refit.
+pub(crate) fn pinned(mut r: PhysicalRecord, q: f64, top: bool) -> PhysicalRecord {
+    let mut sorted = r.y.clone();
+    sorted.sort_by(f64::total_cmp);
+    let k = if top { q } else { 1.0 - q };
+    let end = sorted[((sorted.len() - 1) as f64 * k).round() as usize];
+    r.y.iter_mut().for_each(|y| *y = if top { y.min(end) } else { y.max(end) });
+    r.description += &format!(
+        "; read through a range ending at its {:.0} % quantile ({})",
+        100.0 * k,
+        if top { "top" } else { "bottom" }
+    );
+    r
+}
+
+/// `PIN=lo,hi`: the quantile range an instrument's end is drawn in.
+fn pin() -> Option<(f64, f64)> {
+    std::env::var("PIN").ok().map(|v| {
+        let q: Vec<f64> = v.split(',').map(|x| x.trim().parse().expect("PIN=lo,hi")).collect();
+        assert!(q.len() == 2 && 0.5 < q[0] && q[0] <= q[1] && q[1] < 1.0, "PIN=lo,hi with 0.5 < lo ≤ hi < 1");
+        (q[0], q[1])
+    })
+}
+
 /// A shift's number from the environment variable `name`, when it is set.
 fn env_number(name: &str) -> Option<f64> {
     std::env::var(name).ok().map(|v| v.parse().unwrap_or_else(|_| panic!("{name}=number")))
 }
 
-/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`, `DELAY`, `QUANT`, `DRIFT`; the module's doc),
+/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`, `DELAY`, `QUANT`, `DRIFT`, `PIN`; the module's doc),
 /// unchanged without them.
 fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
@@ -201,7 +232,13 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     if let Some(q) = env_number("QUANT") {
         r = quantised(r, q);
     }
-    let more = env_number("QUANT").is_some() || env_number("DRIFT").is_some();
+    if let Some((lo, hi)) = pin() {
+        // Its own stream of the case's seed: the end's quantile, then its side.
+        let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x0000_9120_0000);
+        let q = lo + (hi - lo) * rng.random::<f64>();
+        r = pinned(r, q, rng.random::<bool>());
+    }
+    let more = env_number("QUANT").is_some() || env_number("DRIFT").is_some() || pin().is_some();
     if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() || more {
         let o = orders.unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
         if orders.is_some() {
@@ -232,7 +269,10 @@ fn study() {
             let ok = if sensor().is_some() {
                 o.physics == "quadratic" && o.on_output
             } else {
-                is_right(case, o.physics)
+                // Behind a pinned instrument a linear plant's one missing physics is the range.
+                let range =
+                    pin().is_some() && case.accepted().is_empty() && o.physics == "saturation" && o.on_output;
+                is_right(case, o.physics) || range
             };
             let fell = o.physics != "none" && o.after < o.before;
             total += 1;

@@ -1,7 +1,8 @@
-//! A real recording: the Silverbox (an electronic Duffing oscillator, `m ÿ + d ẏ + k1 y + k3 y³ =
+//! Real recordings. The Silverbox (an electronic Duffing oscillator, `m ÿ + d ẏ + k1 y + k3 y³ =
 //! u`) against a linear ARX(2,3) simulation fitted on the low-amplitude start of its arrow-head
-//! record. `diagnose` must name the cubic stiffness and raise the held-out FIT by at least 5
-//! points, the target for real recordings.
+//! record: `diagnose` must name the cubic stiffness and raise the held-out FIT by at least 5
+//! points, the target for real recordings. Every recording of the folder: only the
+//! cascaded tanks show an instrument's range.
 //!
 //! The data are not in the repository. They are read from `$MPMWATCH_DATA/silverbox/SNLS80mV.csv`
 //! or, without that variable, from `../shared/data` next to the crate. When the file is absent
@@ -69,4 +70,33 @@ fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
     assert_eq!(f.parameters.get("state_index"), Some(&0.0), "{}", f.summary);
     let (before, after) = (d.report.holdout.fit_before_pct["y"], d.report.holdout.fit_after_pct["y"]);
     assert!(after - before >= 5.0, "held-out FIT {before:.1} → {after:.1}");
+}
+
+/// The instrument's range read off the real recordings: the cascaded tanks' level sensor stops
+/// at 10 V, on both records (the data folder's README counts the samples there), and nothing
+/// else the folder holds shows a range: not TCLab's quantised temperatures (0.32 °C steps,
+/// each held many times), not the drives' pulse-counted speeds, not the Silverbox's voltage.
+#[test]
+fn only_the_tanks_level_sensor_shows_its_range() {
+    let dir = data_dir();
+    let tanks = read_columns(&dir.join("cascaded_tanks/dataBenchmark.csv"), &["yEst", "yVal"]);
+    for y in &tanks {
+        let r = mpmwatch_diagnose::pinned(y).expect("the tanks' level sensor stops at 10 V");
+        assert_eq!((r.lower, r.upper), (f64::NEG_INFINITY, 10.0), "{r:?}");
+        assert_eq!(r.at_upper, y.iter().filter(|&&v| v == 10.0).count());
+        assert!(r.at_upper >= 30, "{r:?}");
+    }
+    let mut others: Vec<(String, Vec<f64>)> = Vec::new();
+    for file in ["tclab/tclab_step_test.csv", "tclab/tclab_sine_test_5min_period.csv"] {
+        let cols = read_columns(&dir.join(file), &["T1", "T2"]);
+        others.extend(cols.into_iter().zip(["T1", "T2"]).map(|(c, n)| (format!("{file} {n}"), c)));
+    }
+    let names = ["z1", "z2", "z3"];
+    let ced = read_columns(&dir.join("ced/DATAPRBS.csv"), &names);
+    others.extend(ced.into_iter().zip(names).map(|(c, n)| (format!("ced {n}"), c)));
+    let silverbox = read_columns(&dir.join("silverbox/SNLS80mV.csv"), &["V2"]);
+    others.push(("silverbox V2".into(), silverbox[0][..40_000].to_vec()));
+    for (name, y) in others {
+        assert_eq!(mpmwatch_diagnose::pinned(&y), None, "{name}");
+    }
 }
