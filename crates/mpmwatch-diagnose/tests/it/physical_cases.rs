@@ -61,21 +61,24 @@ fn a_bent_sensor_is_a_quadratic_on_the_output() {
     }
 }
 
-/// An instrument whose range ends at the recorded output's 95 % quantile, every reading
-/// beyond it that end exactly (the study's `PIN` shift), on the top or the bottom. Against an
-/// exact model of the linear plant (its noise-free output as the simulation) the range is all
-/// the model left out: named a clip on the output at that end, no limit fitted. An actuator
-/// dead zone against its least-squares nominal keeps its name, fitted read through the range.
-/// Each raises the held-out FIT. Seed 1 as the other cases here.
+/// An instrument whose range ends at a quantile of the recorded output, every reading beyond
+/// it that end exactly (the study's `PIN` shift), on the top or the bottom. Against an exact
+/// model of the linear plant (its noise-free output as the simulation), read through a range
+/// that holds a fifth of the record, the range is all the model left out: named a clip on the
+/// output at that end, no limit fitted. (On the top, holding a twentieth, nothing is named:
+/// the exact model leaves the range only by about the noise, and the range must earn the
+/// half-point margin as any finding.) An actuator dead zone against its least-squares nominal, read through a range
+/// holding a twentieth, keeps its name, fitted read through the range. Each raises the
+/// held-out FIT. Seed 1 as the other cases here.
 #[test]
 fn a_pinned_instrument_is_read_through_its_range() {
     let cases = [
-        (PhysicalCase::Linear, true, Physics::Saturation),
-        (PhysicalCase::Linear, false, Physics::Saturation),
-        (PhysicalCase::ActuatorDeadZone, true, Physics::DeadZone),
+        (PhysicalCase::Linear, 0.8, true, Physics::Saturation),
+        (PhysicalCase::Linear, 0.8, false, Physics::Saturation),
+        (PhysicalCase::ActuatorDeadZone, 0.95, true, Physics::DeadZone),
     ];
-    for (case, top, want) in cases {
-        let r = pinned(run(case, 3000, 1).unwrap(), 0.95, top);
+    for (case, q, top, want) in cases {
+        let r = pinned(run(case, 3000, 1).unwrap(), q, top);
         let end = if top {
             r.y.iter().copied().fold(f64::MIN, f64::max)
         } else {
