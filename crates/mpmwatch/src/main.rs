@@ -101,8 +101,8 @@ enum Verb {
     /// saturation, polynomial, backlash on an input; |x| sensor, clip or square-law bend on the
     /// output; Coulomb friction or a cubic spring fed back), fitted by simulation error; a
     /// linear re-fit always competes. An output whose training part sits at its extreme value
-    /// on 1 % of its rows or more, ten times as often as it holds a value on average (a
-    /// transmitter at the end of its span, 10 V full scale), is read through that range by every structure and by the nominal it is compared with;
+    /// on 1 % of its rows or more (at least 5), ten times as often as it holds a value on
+    /// average (for example a transmitter at the end of its span), is read through that range by every structure and by the nominal it is compared with;
     /// the range alone is named (`saturation` on the output) when nothing else is. Closed loop: on each flagged channel every candidate
     /// physics (gain, time_constant, dead_time, missing_coupling, dead_zone, saturation,
     /// quadratic, cubic, bilinear, backlash, coulomb_friction, abs_sensor) is fitted as a

@@ -67,7 +67,7 @@ impl Element for ClipSensor {
         match self.range {
             Some(r) => (
                 format!(
-                    "{}, where the model's simulation goes beyond it (a clip on the output)",
+                    "{}, where the model's simulation goes beyond it (a clip on the output: an instrument's range or a hard limit; the linear dynamics re-fitted with it)",
                     r.describe(output)
                 ),
                 limits.into_iter().filter(|(_, v)| v.is_finite()).collect(),

@@ -47,7 +47,9 @@
 //! drift is: every structure, the linear re-fit included, and the nominal's reference read
 //! through it, so that an element or a linear change is credited only with what it explains
 //! beside the range. A record that needs the range and one physics element (the cascaded
-//! tanks, whose level sensor stops at 10 V) is then fitted with both. When no element is
+//! tanks, whose level sensor stops at 10 V) is then fitted with both. (The linear orders, dead
+//! times included, are searched on the record as it is, before the range is applied.) When no
+//! element is
 //! named, the linear re-fit read through the range is one correction of two parts: what the
 //! range alone adds (the nominal read through it, against the nominal as it is) and what the
 //! linear change adds beside it. The larger names it: a linear change (a transport delay
@@ -323,7 +325,9 @@ pub fn explain(
         }
     }
     // The range alone: the linear re-fit read through it, against the nominal as it is.
-    if let (Some(r), Some(raw), Some((orders, _))) = (reading, raw, &linear) {
+    if let (Some(r), Some(raw), Some((orders, lv))) = (reading, raw, &linear)
+        && range_part > lv.mean - nominal_cv.mean
+    {
         let el = ClipSensor { range: Some(r) };
         let m = Model { element: &el, input: 0, orders: orders.clone() };
         if let Some(v) = cv_fit(&m, d, folds)
@@ -348,11 +352,16 @@ pub fn explain(
                     let i = flagged.first().copied().unwrap_or(0);
                     let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
                     summary += &drift_note(&m, &f, d, names.output);
-                    tried.push(Tried {
-                        physics: Physics::Saturation,
-                        score_vs_null: None,
-                        validation_gain_pct: v.mean - raw.mean,
-                    });
+                    // Its gain is against the nominal as it is, the currency of its gate.
+                    let gain = v.mean - raw.mean;
+                    match tried.iter_mut().find(|t| t.physics == Physics::Saturation) {
+                        Some(t) => t.validation_gain_pct = t.validation_gain_pct.max(gain),
+                        None => tried.push(Tried {
+                            physics: Physics::Saturation,
+                            score_vs_null: None,
+                            validation_gain_pct: gain,
+                        }),
+                    }
                     return Explanation {
                         finding: finding(
                             names,

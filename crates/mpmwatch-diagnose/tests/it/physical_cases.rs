@@ -103,6 +103,11 @@ fn a_pinned_instrument_is_read_through_its_range() {
         let h = &d.report.holdout;
         assert!(h.fit_after_pct["y1"] > h.fit_before_pct["y1"], "{case:?} top {top}: {h:?}");
     }
+    let r = pinned(run(PhysicalCase::Linear, 3000, 1).unwrap(), 0.95, true);
+    let d = diagnose_against(&r, &r.plant);
+    for f in &d.report.findings {
+        assert_eq!(f.physics, Physics::Unexplained, "a twentieth: {}", f.summary);
+    }
 }
 
 /// A linear plant: no nonlinear class is named (a linear change may be, when the re-fit earns

@@ -269,10 +269,18 @@ fn study() {
             let ok = if sensor().is_some() {
                 o.physics == "quadratic" && o.on_output
             } else {
-                // Behind a pinned instrument a linear plant's one missing physics is the range.
-                let range =
+                // Behind a pinned instrument a linear plant's one missing physics is the range, a
+                // clip on the output; for any other plant the range alone (the finding that
+                // names the instrument's range, no limit fitted) names the instrument, not the
+                // plant.
+                let linear_clip =
                     pin().is_some() && case.accepted().is_empty() && o.physics == "saturation" && o.on_output;
-                is_right(case, o.physics) || range
+                let range_alone = d.report.findings.iter().any(|f| {
+                    f.physics == Physics::Saturation
+                        && f.summary.contains("instrument reads")
+                        && f.summary.contains("an instrument's range or a hard limit")
+                });
+                (is_right(case, o.physics) && !range_alone) || linear_clip
             };
             let fell = o.physics != "none" && o.after < o.before;
             total += 1;

@@ -80,11 +80,13 @@ fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
 fn only_the_tanks_level_sensor_shows_its_range() {
     let dir = data_dir();
     let tanks = read_columns(&dir.join("cascaded_tanks/dataBenchmark.csv"), &["yEst", "yVal"]);
-    for y in &tanks {
+    // Whole records, and the validation record's first 70 %, the training part the casebook's
+    // row diagnoses (13 rows at 10 V, where ten times its average hold is 10.6 rows).
+    for y in [&tanks[0][..], &tanks[1][..], &tanks[1][..716]] {
         let r = mpmwatch_diagnose::pinned(y).expect("the tanks' level sensor stops at 10 V");
         assert_eq!((r.lower, r.upper), (f64::NEG_INFINITY, 10.0), "{r:?}");
         assert_eq!(r.at_upper, y.iter().filter(|&&v| v == 10.0).count());
-        assert!(r.at_upper >= 30, "{r:?}");
+        assert!(r.at_upper >= 13, "{r:?}");
     }
     let mut others: Vec<(String, Vec<f64>)> = Vec::new();
     for file in ["tclab/tclab_step_test.csv", "tclab/tclab_sine_test_5min_period.csv"] {
