@@ -49,10 +49,9 @@
 //! beside the range. A record that needs the range and one physics element (the cascaded
 //! tanks, whose level sensor stops at 10 V) is then fitted with both. (The linear orders, dead
 //! times included, are searched on the record as it is, before the range is applied.) When no
-//! element is
-//! named, the linear re-fit read through the range is one correction of two parts: what the
-//! range alone adds (the nominal read through it, against the nominal as it is) and what the
-//! linear change adds beside it. The larger names it: a linear change (a transport delay
+//! element is named, the linear re-fit read through the range is one correction of two parts:
+//! what the range alone adds (the nominal read through it, against the nominal as it is) and
+//! what the linear change adds beside it. The larger names it: a linear change (a transport delay
 //! behind a pinned transmitter), or the range itself, a clip on the output, when the re-fit
 //! read through it passes the gate against the nominal as it is (a linear plant behind a
 //! pinned instrument, a clip the range reproduces).
@@ -373,7 +372,11 @@ pub fn explain(
                             tried,
                         ),
                         corrected: Some(sim),
-                        curve: m.curve(&f, d, names.inputs[i], names.output),
+                        // Nothing of the clip is fitted: its limits are the record's.
+                        curve: m.curve(&f, d, names.inputs[i], names.output).map(|mut c| {
+                            c.label = "the range read off the record".into();
+                            c
+                        }),
                         withheld: false,
                     };
                 }
