@@ -67,9 +67,9 @@ fn a_bent_sensor_is_a_quadratic_on_the_output() {
 /// that holds a fifth of the record, the range is all the model left out: named a clip on the
 /// output at that end, no limit fitted. (On the top, holding a twentieth, nothing is named:
 /// the exact model leaves the range only by about the noise, and the range must earn the
-/// half-point margin as any finding.) An actuator dead zone against its least-squares nominal, read through a range
-/// holding a twentieth, keeps its name, fitted read through the range. Each raises the
-/// held-out FIT. Seed 1 as the other cases here.
+/// half-point margin as any finding.) An actuator dead zone against its least-squares
+/// nominal, read through a range holding a twentieth, keeps its name, fitted read through the
+/// range. Each raises the held-out FIT. Seed 1 as the other cases here.
 #[test]
 fn a_pinned_instrument_is_read_through_its_range() {
     let cases = [
