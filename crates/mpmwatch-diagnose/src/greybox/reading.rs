@@ -44,9 +44,10 @@ pub struct Reading {
 }
 
 impl Reading {
-    /// `v` as the instrument reads it.
+    /// `v` as the instrument reads it (a NaN stays NaN). `max` then `min`, not `clamp`: a range
+    /// built by hand with its ends crossed or NaN must not panic (the upper end then wins).
     pub fn read(&self, v: f64) -> f64 {
-        v.clamp(self.lower, self.upper)
+        if v.is_nan() { v } else { v.max(self.lower).min(self.upper) }
     }
 
     /// Whether `v` is strictly inside the range, where a reading is the value itself.
@@ -142,6 +143,9 @@ mod tests {
         let r = Reading { lower: f64::NEG_INFINITY, upper: 10.0, at_lower: 0, at_upper: 47 };
         assert_eq!(r.read(13.0), 10.0);
         assert_eq!(r.read(-5.0), -5.0);
+        let crossed = Reading { lower: 2.0, upper: 1.0, at_lower: 5, at_upper: 5 };
+        assert_eq!(crossed.read(0.0), 1.0);
+        assert!(r.read(f64::NAN).is_nan());
         assert!(r.inside(9.99) && !r.inside(10.0));
         assert_eq!(r.describe("y"), "y's instrument reads no higher than 10.00 (47 training rows sit there)");
     }
