@@ -124,11 +124,50 @@ fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
 
+/// The input signal a case is recorded under.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Signal {
+    /// The generator's own: a staircase of uniform levels held for about the plant's settling
+    /// time, or (one seed in three) low-pass filtered Gaussian noise.
+    #[default]
+    Drawn,
+    /// A random-phase multisine: 40 sines of equal amplitude at frequencies spread evenly from
+    /// one period per record up to the staircase's shortest hold, the signal the nonlinear
+    /// benchmarks record with.
+    Multisine,
+    /// The staircase held a quarter as long (a quarter of the shortest hold up to the shortest),
+    /// an experiment that moves faster than the plant settles.
+    FastSteps,
+}
+
 /// A staircase of uniform levels in `[lo, hi]` held for `hold.0..hold.1` samples, or (one seed
 /// in three) Gaussian noise low-pass filtered with a time constant of `hold.0` samples, scaled
-/// to the same range.
-fn input(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64, hold: (usize, usize)) -> Vec<f64> {
-    if rng.random::<f64>() < 1.0 / 3.0 {
+/// to the same range; other signals by `signal` ([`Signal`]).
+fn input(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64, hold: (usize, usize), signal: Signal) -> Vec<f64> {
+    let (mid, half) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
+    let hold = match signal {
+        Signal::Multisine => {
+            let top = 1.0 / hold.0.max(2) as f64;
+            let lines = 40;
+            let phases: Vec<f64> = (0..lines).map(|_| std::f64::consts::TAU * rng.random::<f64>()).collect();
+            let raw: Vec<f64> = (0..n)
+                .map(|t| {
+                    (0..lines)
+                        .map(|k| {
+                            let f = 1.0 / n as f64 + (top - 1.0 / n as f64) * k as f64 / (lines - 1) as f64;
+                            (std::f64::consts::TAU * f * t as f64 + phases[k]).sin()
+                        })
+                        .sum::<f64>()
+                })
+                .collect();
+            // Scaled as the filtered noise is: 1.8 standard deviations to the range's edge.
+            let sd = var(&raw).sqrt().max(f64::MIN_POSITIVE);
+            return raw.iter().map(|v| (mid + half * v / (1.8 * sd)).clamp(lo, hi)).collect();
+        }
+        Signal::FastSteps => ((hold.0 / 4).max(1), hold.0.max(1)),
+        Signal::Drawn => hold,
+    };
+    if signal == Signal::Drawn && rng.random::<f64>() < 1.0 / 3.0 {
         let a = (-1.0 / hold.0.max(1) as f64).exp();
         let mut x = 0.0;
         let raw: Vec<f64> = (0..n)
@@ -138,7 +177,6 @@ fn input(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64, hold: (usize, usize))
                 x
             })
             .collect();
-        let (mid, half) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
         return raw.iter().map(|v| (mid + half * v / 1.8).clamp(lo, hi)).collect();
     }
     let mut u = Vec::with_capacity(n);
@@ -195,6 +233,13 @@ fn lag(w: &[f64], a: f64) -> Vec<f64> {
 
 /// Simulates one case of `n` samples from `seed`.
 pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, SimError> {
+    run_with(case, n, seed, Signal::Drawn)
+}
+
+/// [`run`] under another input signal ([`Signal`]), for studies of how the diagnosis fares on
+/// experiments other than the generator's own. The other parameters are drawn from the same
+/// ranges, but not the same values: the signal's draws come first.
+pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Result<PhysicalRecord, SimError> {
     if n < 500 {
         return Err(SimError::parameter("physical case length", n, "at least 500 samples"));
     }
@@ -203,7 +248,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
         PhysicalCase::Linear => {
             let (omega, zeta) = (uniform(&mut rng, 0.05, 0.4), uniform(&mut rng, 0.3, 1.5));
             let hold = (3.0 / omega) as usize;
-            let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold));
+            let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold), signal);
             let (x, _) = oscillator(&u, omega, zeta, 8, |_, _| 0.0);
             (u, x, format!("ω {omega:.3} rad/sample, ζ {zeta:.2}"))
         }
@@ -211,7 +256,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let (omega, zeta) = (uniform(&mut rng, 0.05, 0.3), uniform(&mut rng, 0.05, 0.4));
             let hold = (2.0 / omega) as usize;
             let amp = uniform(&mut rng, 0.5, 2.0);
-            let u = input(&mut rng, n, -amp, amp, (hold, 4 * hold));
+            let u = input(&mut rng, n, -amp, amp, (hold, 4 * hold), signal);
             // The cubic force at the typical excursion `amp` is `share` of the linear one.
             let share = uniform(&mut rng, 0.15, 0.8);
             let k3 = share / (amp * amp);
@@ -228,7 +273,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let a = uniform(&mut rng, 0.8, 0.97);
             let amp = uniform(&mut rng, 0.5, 2.0);
             let hold = (3.0 / (1.0 - a)) as usize;
-            let u = input(&mut rng, n, -amp, amp, (hold / 2 + 1, 2 * hold));
+            let u = input(&mut rng, n, -amp, amp, (hold / 2 + 1, 2 * hold), signal);
             let fc = uniform(&mut rng, 0.1, 0.45) * amp;
             // Velocity of a mass under viscous drag, v(t+1) = a v + (1 − a)(u − Fc sign v),
             // with sticking: a mass at rest stays there while |u| ≤ Fc, and a mass whose
@@ -255,7 +300,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let hold = (2.0 / (1.0 - a)) as usize;
             let vmax = uniform(&mut rng, 5.0, 12.0);
             let vmin = uniform(&mut rng, 0.0, 0.5) * vmax;
-            let u = input(&mut rng, n, vmin, vmax, (hold / 2 + 1, 2 * hold));
+            let u = input(&mut rng, n, vmin, vmax, (hold / 2 + 1, 2 * hold), signal);
             let k = uniform(&mut rng, 0.2, 1.0);
             let sensor = uniform(&mut rng, 0.0, 0.8);
             let p: Vec<f64> = u.iter().map(|v| k * v * v).collect();
@@ -265,7 +310,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
         PhysicalCase::ClippingSensor => {
             let (omega, zeta) = (uniform(&mut rng, 0.05, 0.4), uniform(&mut rng, 0.5, 1.5));
             let hold = (3.0 / omega) as usize;
-            let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold));
+            let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold), signal);
             let (x, _) = oscillator(&u, omega, zeta, 8, |_, _| 0.0);
             let mut sorted = x.clone();
             sorted.sort_by(f64::total_cmp);
@@ -280,7 +325,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
         PhysicalCase::DiodeCircuit => {
             let (a1, a2) = (uniform(&mut rng, 0.5, 0.95), uniform(&mut rng, 0.3, 0.9));
             let hold = (3.0 / (1.0 - a1)) as usize;
-            let u = input(&mut rng, n, -1.0, 1.0, (hold / 2 + 1, 2 * hold));
+            let u = input(&mut rng, n, -1.0, 1.0, (hold / 2 + 1, 2 * hold), signal);
             let w = lag(&u, a1);
             let sd = var(&w).sqrt();
             let c = uniform(&mut rng, 0.6, 1.8) * sd;
@@ -291,7 +336,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let (k1, k2) = (uniform(&mut rng, 0.02, 0.06), uniform(&mut rng, 0.02, 0.06));
             let pump = uniform(&mut rng, 0.03, 0.08);
             let hold = (1.5 / k1.min(k2)) as usize;
-            let u = input(&mut rng, n, 1.0, 10.0, (hold / 2 + 1, 2 * hold));
+            let u = input(&mut rng, n, 1.0, 10.0, (hold / 2 + 1, 2 * hold), signal);
             // Levels without a rim, to set the rim below the upper tank's high levels.
             let run_tanks = |rim: f64| -> (Vec<f64>, Vec<f64>) {
                 let (mut h1, mut h2) = ((pump * 5.0 / k1).powi(2), (pump * 5.0 / k2).powi(2));
@@ -326,7 +371,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
         PhysicalCase::ActuatorDeadZone => {
             let (omega, zeta) = (uniform(&mut rng, 0.05, 0.4), uniform(&mut rng, 0.5, 1.5));
             let hold = (3.0 / omega) as usize;
-            let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold));
+            let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold), signal);
             let w = uniform(&mut rng, 0.1, 0.45);
             let dz: Vec<f64> = u.iter().map(|v| v.signum() * (v.abs() - w).max(0.0)).collect();
             let (x, _) = oscillator(&dz, omega, zeta, 8, |_, _| 0.0);
@@ -336,7 +381,7 @@ pub fn run(case: PhysicalCase, n: usize, seed: u64) -> Result<PhysicalRecord, Si
             let a = uniform(&mut rng, 0.6, 0.95);
             let d = rng.random_range(3..=12usize);
             let hold = (2.0 / (1.0 - a)) as usize + d;
-            let u = input(&mut rng, n, -1.0, 1.0, (hold / 2 + 1, 2 * hold));
+            let u = input(&mut rng, n, -1.0, 1.0, (hold / 2 + 1, 2 * hold), signal);
             let delayed: Vec<f64> = (0..n).map(|t| u[t.saturating_sub(d)]).collect();
             (u, lag(&delayed, a), format!("pole {a:.2}, transport delay {d} samples"))
         }
@@ -444,6 +489,38 @@ mod tests {
             let den: f64 = r.y.iter().map(|a| (a - m).powi(2)).sum::<f64>().sqrt();
             assert!(1.0 - num / den > 0.5, "seed {seed}: FIT {}", 100.0 * (1.0 - num / den));
         }
+    }
+
+    /// The other signals stay in the case's input range (the heater's voltages between 0 and
+    /// 12 V, the pump's between 1 and 10), and the fast staircase changes level more often than
+    /// the drawn one: its holds are a quarter of the shortest drawn hold up to that hold. A seed
+    /// whose drawn input is the filtered noise (it changes every sample) is skipped for that
+    /// comparison, which needs a staircase.
+    #[test]
+    fn the_other_signals_stay_in_range_and_the_fast_one_moves_faster() {
+        let changes = |u: &[f64]| u.windows(2).filter(|w| w[0] != w[1]).count();
+        let mut compared = 0;
+        for case in PhysicalCase::ALL {
+            for seed in 1..=3 {
+                let drawn = run(case, 1500, seed).unwrap();
+                let (lo, hi) = match case {
+                    PhysicalCase::HeaterVoltage => (0.0, 12.0),
+                    PhysicalCase::TankOverflow => (1.0, 10.0),
+                    _ => (-2.0, 2.0),
+                };
+                for signal in [Signal::Multisine, Signal::FastSteps] {
+                    let r = run_with(case, 1500, seed, signal).unwrap();
+                    assert!(r.u.iter().all(|v| (lo..=hi).contains(v)), "{case:?} {seed} {signal:?}");
+                    assert!(var(&r.u) > 0.0, "{case:?} {seed} {signal:?}");
+                }
+                if changes(&drawn.u) < 1000 {
+                    let fast = run_with(case, 1500, seed, Signal::FastSteps).unwrap();
+                    assert!(changes(&fast.u) > changes(&drawn.u), "{case:?} {seed}");
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared >= 9, "only {compared} staircases compared");
     }
 
     #[test]

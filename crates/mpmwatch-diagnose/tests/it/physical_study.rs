@@ -25,12 +25,18 @@
 //! drawn in `lo..hi` on the top or the bottom, either at random (seeded by the case's seed):
 //! every reading beyond it is that end exactly, as a transmitter at the end of its span reads.
 //! It comes last, after the noise, the drift and the steps. A linear plant is then also named
-//! right as a clip on the output (`saturation (output)`), the range it is read through.
+//! right as a clip on the output (`saturation (output)`), the range it is read through. An
+//! eighth, `SIGNAL=multisine|fast`, records every case under another input signal: a
+//! random-phase multisine over the staircase's band, or the staircase held a quarter as long
+//! (`mpmwatch_sim::physical_cases::Signal`); the plant's parameters are then other draws from
+//! the same ranges.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
 use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
-use mpmwatch_sim::physical_cases::{PhysicalCase, PhysicalRecord, nominal_simulation_of, run};
+use mpmwatch_sim::physical_cases::{
+    PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_of, run_with,
+};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::SeedableRng;
@@ -185,6 +191,17 @@ fn pin() -> Option<(f64, f64)> {
     })
 }
 
+/// `SIGNAL=multisine|fast`: the input signal every case is recorded under ([`Experiment`]; the
+/// generator's own without it).
+fn signal() -> Experiment {
+    match std::env::var("SIGNAL").as_deref() {
+        Err(_) => Experiment::Drawn,
+        Ok("multisine") => Experiment::Multisine,
+        Ok("fast") => Experiment::FastSteps,
+        Ok(other) => panic!("SIGNAL={other}: multisine or fast"),
+    }
+}
+
 /// A shift's number from the environment variable `name`, when it is set.
 fn env_number(name: &str) -> Option<f64> {
     std::env::var(name).ok().map(|v| v.parse().unwrap_or_else(|_| panic!("{name}=number")))
@@ -263,7 +280,7 @@ fn study() {
         }
         let mut case_right = 0;
         for seed in a..b {
-            let r = shifted(run(case, n, seed).unwrap());
+            let r = shifted(run_with(case, n, seed, signal()).unwrap());
             let d = diagnose_record(&r);
             let o = outcome(&d);
             let ok = if sensor().is_some() {
@@ -360,7 +377,7 @@ fn no_change_study() {
     for case in PhysicalCase::ALL {
         let (mut case_named, mut case_unexplained) = (0, 0);
         for seed in a..b {
-            let r = run(case, n, seed).unwrap();
+            let r = run_with(case, n, seed, signal()).unwrap();
             let d = diagnose_against(&r, &r.plant);
             for f in &d.report.findings {
                 eprintln!("{:<18} seed {seed:>4} {}: {}", case.name(), f.physics.name(), f.summary);
