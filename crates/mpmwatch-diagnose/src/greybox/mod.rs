@@ -502,9 +502,16 @@ impl Model<'_> {
     }
 
     /// The equation-error least-squares fit of the coefficients, the element's parameters
-    /// fixed at `p`, on `rows` where the output map is invertible; `y` is the recorded output
-    /// or what stands in for `x`.
-    fn equation_error(&self, p: &[f64], u: &[&[f64]], y: &[f64], rows: &[usize]) -> Option<Fitted> {
+    /// fixed at `p`, on `rows` where the output map is invertible and the `recorded` output is
+    /// inside the instrument's range; `y` is the recorded output or what stands in for `x`.
+    fn equation_error(
+        &self,
+        p: &[f64],
+        u: &[&[f64]],
+        y: &[f64],
+        recorded: &[f64],
+        rows: &[usize],
+    ) -> Option<Fitted> {
         let (sig, nk) = self.signals(p, u);
         let o = &self.orders;
         let first = self.orders.reach();
@@ -541,7 +548,9 @@ impl Model<'_> {
         // A reading held at the instrument's range says only that the value is beyond it.
         let ok = |t: usize| {
             (0..=o.na).all(|k| {
-                t >= k && self.element.invertible(p, y[t - k]) && o.reading.is_none_or(|r| r.inside(y[t - k]))
+                t >= k
+                    && self.element.invertible(p, y[t - k])
+                    && o.reading.is_none_or(|r| r.inside(recorded[t - k]))
             })
         };
         let used: Vec<usize> = rows.iter().copied().filter(|&t| t >= first && ok(t)).collect();
@@ -580,7 +589,7 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
         targets.into_iter().map(move |t| (p.clone(), t))
     });
     for (p, target) in tries {
-        let Some(start) = model.equation_error(&p, &d.u, &target, rows) else { continue };
+        let Some(start) = model.equation_error(&p, &d.u, &target, d.y, rows) else { continue };
         let mut candidates = vec![start.clone()];
         let (fixed, free) = p.split_at(model.element.fixed().min(p.len()));
         let n_p = free.len();
@@ -686,6 +695,43 @@ mod tests {
             let got = m.slowest_pole(&f);
             assert!(got == want || (got - want).abs() < 1e-9, "store {store}: {got} against {want}");
         }
+    }
+
+    /// The equation-error start leaves out the rows whose recorded reading is held at the
+    /// instrument's range, whatever stands in for `x` there: a noise-free first-order plant
+    /// `x(t) = 0.8 x(t−1) + 0.5 u(t−1)` read through a range whose top sits where the record
+    /// is corrupted (those rows replaced by the top, a reading the plant never gave), fitted
+    /// from the record negated (a stand-in on which the top never binds: every value is
+    /// below it) as a sign-losing sensor's start can be. Rows held at the top dropped, the
+    /// stand-in's own equation holds on every row left and the coefficients come back to
+    /// the least-squares solve's rounding (1e-9); a filter on the stand-in would keep the
+    /// corrupted rows and miss them by far.
+    #[test]
+    fn the_equation_error_start_drops_rows_held_at_the_range_by_the_reading() {
+        let n = 400;
+        let u: Vec<f64> = (0..n).map(|t| if (t / 20) % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let mut x = vec![0.0; n];
+        for t in 1..n {
+            x[t] = 0.8 * x[t - 1] + 0.5 * u[t - 1];
+        }
+        let top = 5.0;
+        let mut y = x.clone();
+        for t in (50..n).step_by(37) {
+            y[t] = top;
+        }
+        let stand_in: Vec<f64> = y.iter().map(|v| -v).collect();
+        let reading = Reading { lower: f64::NEG_INFINITY, upper: top, at_lower: 0, at_upper: 10 };
+        let m = Model {
+            element: &Linear,
+            input: 0,
+            orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: Some(reading) },
+        };
+        let rows: Vec<usize> = (2..n).collect();
+        let f = m.equation_error(&[], &[&u], &stand_in, &y, &rows).unwrap();
+        // The negated record obeys the same recursion with the input negated: a = 0.8, b = −0.5.
+        assert!((f.theta[0] - 0.8).abs() < 1e-9 && (f.theta[1] + 0.5).abs() < 1e-9, "{:?}", f.theta);
+        let kept_all = m.equation_error(&[], &[&u], &stand_in, &stand_in, &rows).unwrap();
+        assert!((kept_all.theta[0] - 0.8).abs() > 1e-3, "{:?}", kept_all.theta);
     }
 
     /// A noise-free first-order plant `x(t) = 0.9 x(t−1) + 0.3 u(t−1)` read with a drift,
