@@ -704,8 +704,8 @@ mod tests {
     /// from the record negated (a stand-in on which the top never binds: every value is
     /// below it) as a sign-losing sensor's start can be. Rows held at the top dropped, the
     /// stand-in's own equation holds on every row left and the coefficients come back to
-    /// the least-squares solve's rounding (1e-9); a filter on the stand-in would keep the
-    /// corrupted rows and miss them by far.
+    /// the least-squares solve's rounding (1e-9); a filter on the stand-in keeps the corrupted
+    /// rows and misses the pole by more than a thousandth.
     #[test]
     fn the_equation_error_start_drops_rows_held_at_the_range_by_the_reading() {
         let n = 400;

@@ -28,8 +28,8 @@
 //! right as a clip on the output (`saturation (output)`), the range it is read through. An
 //! eighth, `SIGNAL=multisine|fast`, records every case under another input signal: a
 //! random-phase multisine over the staircase's band, or the staircase held a quarter as long
-//! (`mpmwatch_sim::physical_cases::Signal`); the plant's parameters are then other draws from
-//! the same ranges.
+//! (`mpmwatch_sim::physical_cases::Signal`); the plant's dynamics are the seed's own, the
+//! nonlinearity's size and the noise other draws from the same ranges.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
