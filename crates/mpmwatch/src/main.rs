@@ -102,8 +102,10 @@ enum Verb {
     /// output; Coulomb friction or a cubic spring fed back), fitted by simulation error; a
     /// linear re-fit always competes. An output whose training part sits at its extreme value
     /// on 1 % of its rows or more (at least 5), ten times as often as it holds a value on
-    /// average (for example a transmitter at the end of its span), is read through that range by every structure and by the nominal it is compared with;
-    /// the range alone is named (`saturation` on the output) when nothing else is. Closed loop: on each flagged channel every candidate
+    /// average (for example a transmitter at the end of its span), is read through that range
+    /// by every structure and by the nominal it is compared with; the range alone is named
+    /// (`saturation` on the output) when no element is and the range adds more than the
+    /// linear change beside it. Closed loop: on each flagged channel every candidate
     /// physics (gain, time_constant, dead_time, missing_coupling, dead_zone, saturation,
     /// quadratic, cubic, bilinear, backlash, coulomb_friction, abs_sensor) is fitted as a
     /// correction, instrumented by the dither-driven part of the inputs, and scored by one-step
