@@ -2,12 +2,15 @@
 //! `WIDE=count` drawn by `wide_specs`, with the grey-box structures explaining the outputs the
 //! dithers flag (`GREYBOX=1`) or the residual corrections (default). Ignored; `SEED=100
 //! cargo test -p mpmwatch-diagnose --test it closed_loop_study -- --ignored --nocapture` prints
-//! one line per case and the rates (`VERBOSE=1` adds each case's draw, the locating statistics
+//! one line per case (with the held-out FIT of the true plant driven by the recorded MVs, the
+//! most a finding could reach: under feedback it can lie below the nominal's) and the rates,
+//! split by whether the true plant raises the held-out FIT by the closed-loop margin
+//! (`VERBOSE=1` adds each case's draw, the locating statistics
 //! of its changed channel (MI and cross-correlation; not the dither-projection test) and every
 //! finding's candidates; `GATE=a,b` sets the honesty gate's two margins, in points:
 //! `min_gain_pct` and `closed_loop_min_gain_pct`).
 
-use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered};
+use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered, fit_pct};
 use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
 
 /// `GATE=a,b`: the honesty gate's `min_gain_pct` (here the small, consistent gain's margin
@@ -39,6 +42,9 @@ fn closed_loop_study() {
         ..defaults
     };
     let (mut named, mut chan, mut total, mut alarms, mut nulls, mut fell) = (0, 0, 0, 0, 0, 0);
+    // Mismatch cases named right / counted, split by whether the true plant raises the
+    // held-out FIT by the closed-loop gate's margin (under feedback it may not).
+    let (mut winnable, mut unwinnable) = ((0, 0), (0, 0));
     let wide: Option<usize> = std::env::var("WIDE").ok().and_then(|v| v.parse().ok());
     let verbose = std::env::var_os("VERBOSE").is_some();
     let specs = match wide {
@@ -97,10 +103,19 @@ fn closed_loop_study() {
                 }
             }
         }
+        // What the true plant does to the held-out FIT: the ceiling of any finding's gain.
+        let tail = d.report.holdout.start_index..rec.y[cj].len();
+        let truth = fit_pct(&rec.y[cj][tail.clone()], &rec.plant_output[cj][tail]);
+        if spec.effect.is_mismatch() {
+            let by =
+                if truth - fb >= opts.closed_loop_min_gain_pct { &mut winnable } else { &mut unwinnable };
+            by.0 += usize::from(right);
+            by.1 += 1;
+        }
         let reported = f.is_some_and(|f| f.physics != Physics::Unexplained);
         fell += usize::from(reported && fa < fb);
         eprintln!(
-            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1}",
+            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1} (the true plant {:6.1})",
             spec.name,
             spec.effect.physics(),
             f.map_or("none", |f| f.physics.name()),
@@ -113,10 +128,15 @@ fn closed_loop_study() {
                 "NO"
             },
             fb,
-            fa
+            fa,
+            truth
         );
     }
     eprintln!(
         "greybox {greybox} seed {seed}: physics {named}/{total}, channel {chan}/{total}, null cases with findings {alarms}/{nulls}, reported findings whose held-out FIT fell {fell}"
+    );
+    eprintln!(
+        "  where the true plant raises the held-out FIT by at least {} points: physics {}/{}; elsewhere {}/{}",
+        opts.closed_loop_min_gain_pct, winnable.0, winnable.1, unwinnable.0, unwinnable.1
     );
 }

@@ -134,6 +134,10 @@ pub struct ScenarioRecord {
     pub effect_ratio: f64,
     /// The effect's strength parameter (see [`describe`]).
     pub strength: f64,
+    /// The CVs without the disturbance: the true plant driven by the recorded MVs, what a
+    /// perfect correction of the nominal would simulate. For studies only (a bound on what
+    /// any finding can do to the held-out FIT); `diagnose` never sees it.
+    pub plant_output: Vec<Vec<f64>>,
 }
 
 /// A first-order-plus-dead-time channel `x(t) = a·x(t−1) + K(1−a)·w(t−1−d)`.
@@ -451,9 +455,10 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
             }
         }
     }
-    let effect: Vec<f64> = (0..n).map(|k| y[cj][k] - v[cj][k] - s[cj][k]).collect();
+    let plant_output: Vec<Vec<f64>> = (0..m).map(|j| (0..n).map(|k| y[j][k] - v[j][k]).collect()).collect();
+    let effect: Vec<f64> = (0..n).map(|k| plant_output[cj][k] - s[cj][k]).collect();
     let ratio = var(&effect[100..]) / var(&v[cj][100..]).max(1e-300);
-    ScenarioRecord { u, d: d.to_vec(), y, s, effect_ratio: ratio, strength: t }
+    ScenarioRecord { u, d: d.to_vec(), y, s, effect_ratio: ratio, strength: t, plant_output }
 }
 
 fn var(x: &[f64]) -> f64 {
@@ -520,4 +525,31 @@ pub fn casebook_specs(n: usize, seed: u64) -> Vec<ScenarioSpec> {
             plant: None,
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plant's output is the record without its disturbance, driven by the recorded MVs as
+    /// the nominal is: equal to the nominal simulation wherever the model is exact (every
+    /// output of a no-change case; the unchanged outputs of a 2×2 gain change, whose inputs
+    /// both simulations share), different on the output whose channel changed.
+    #[test]
+    fn the_plant_output_is_the_nominal_where_the_model_is_exact() {
+        let gap = |a: &[f64], b: &[f64]| a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        for spec in
+            casebook_specs(600, 5).iter().filter(|s| matches!(s.effect, Effect::NoChange | Effect::Gain))
+        {
+            let rec = run(spec).unwrap();
+            for j in 0..spec.size {
+                let g = gap(&rec.plant_output[j], &rec.s[j]);
+                if spec.effect == Effect::Gain && j == spec.channel.1 {
+                    assert!(g > 1e-3, "{}: the changed output y{} equals the nominal", spec.name, j + 1);
+                } else {
+                    assert!(g < 1e-9, "{}: y{} departs from the nominal by {g}", spec.name, j + 1);
+                }
+            }
+        }
+    }
 }
