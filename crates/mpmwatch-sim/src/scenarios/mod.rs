@@ -297,7 +297,7 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
     let (mut lo, mut hi) = (0.0, t_max);
     let mut best: Option<ScenarioRecord> = None;
     let mut keep = |r: ScenarioRecord| {
-        if r.effect_ratio.is_finite()
+        if r.effect_ratio < RUNAWAY_RATIO
             && best.as_ref().is_none_or(|b| {
                 (r.effect_ratio - spec.target_ratio).abs() < (b.effect_ratio - spec.target_ratio).abs()
             })
@@ -320,8 +320,20 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
             lo = mid;
         }
     }
-    best.ok_or_else(|| SimError::parameter("scenario strength", spec.effect.physics(), "no finite run found"))
+    best.ok_or_else(|| {
+        SimError::parameter(
+            "scenario strength",
+            spec.effect.physics(),
+            "the loop runs away at every strength tried (no run whose effect stays under a million times the disturbance's variance): not a concealed case",
+        )
+    })
 }
+
+/// An effect whose variance is this many times the disturbance's is no concealed mismatch but
+/// a loop the nonlinearity broke: the target ratios are at most 0.8, and a PI loop closed
+/// through an |x| sensor whose sign flips runs away to outputs of 10⁹ (w10691, drawn at
+/// stop 40), finite but meaningless.
+const RUNAWAY_RATIO: f64 = 1e6;
 
 /// One closed-loop run at strength `t`.
 ///
@@ -535,6 +547,20 @@ mod tests {
     /// the nominal is: equal to the nominal simulation wherever the model is exact (every
     /// output of a no-change case; the unchanged outputs of a 2×2 gain change, whose inputs
     /// both simulations share), different on the output whose channel changed.
+    /// A draw whose loop runs away at every strength (an |x| sensor's, from the wide
+    /// generator's seed 10680) is refused with the reason, not returned as a record of 10⁹.
+    #[test]
+    fn a_loop_that_runs_away_at_every_strength_is_no_case() {
+        let spec =
+            wide_specs(40, 3000, 10680).into_iter().find(|s| s.name == "w10691_abs_sensor_3x3").unwrap();
+        let err = run(&spec).unwrap_err().to_string();
+        assert!(err.contains("runs away"), "{err}");
+        // The next draw of the set is a case as before.
+        let next =
+            wide_specs(40, 3000, 10680).into_iter().find(|s| s.name == "w10692_time_constant_3x3").unwrap();
+        assert!(run(&next).unwrap().effect_ratio < 10.0);
+    }
+
     #[test]
     fn the_plant_output_is_the_nominal_where_the_model_is_exact() {
         let gap = |a: &[f64], b: &[f64]| a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
