@@ -45,6 +45,10 @@ fn closed_loop_study() {
     // Mismatch cases named right / counted, split by whether the true plant raises the
     // held-out FIT by the closed-loop gate's margin (under feedback it may not).
     let (mut winnable, mut unwinnable) = ((0, 0), (0, 0));
+    // The same, for the cases whose effect stayed under a tenth of the disturbance's variance
+    // (a bounded strength, a time constant at most 3.94 times the model's or a dead time at
+    // most 6 samples longer, may not reach the drawn ratio of 0.1–0.8).
+    let mut weak = (0, 0);
     let wide: Option<usize> = std::env::var("WIDE").ok().and_then(|v| v.parse().ok());
     let verbose = std::env::var_os("VERBOSE").is_some();
     let specs = match wide {
@@ -118,11 +122,15 @@ fn closed_loop_study() {
                 if truth - fb >= opts.closed_loop_min_gain_pct { &mut winnable } else { &mut unwinnable };
             by.0 += usize::from(right);
             by.1 += 1;
+            if rec.effect_ratio < 0.1 {
+                weak.0 += usize::from(right);
+                weak.1 += 1;
+            }
         }
         let reported = f.is_some_and(|f| f.physics != Physics::Unexplained);
         fell += usize::from(reported && fa < fb);
         eprintln!(
-            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1} (the true plant {:6.1})",
+            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1} (the true plant {:6.1}; effect ratio {:.3})",
             spec.name,
             spec.effect.physics(),
             f.map_or("none", |f| f.physics.name()),
@@ -136,7 +144,8 @@ fn closed_loop_study() {
             },
             fb,
             fa,
-            truth
+            truth,
+            rec.effect_ratio
         );
     }
     eprintln!(
@@ -145,5 +154,9 @@ fn closed_loop_study() {
     eprintln!(
         "  where the true plant raises the held-out FIT by at least {} points: physics {}/{}; elsewhere {}/{}",
         opts.closed_loop_min_gain_pct, winnable.0, winnable.1, unwinnable.0, unwinnable.1
+    );
+    eprintln!(
+        "  whose effect stayed under a tenth of the disturbance's variance: physics {}/{}",
+        weak.0, weak.1
     );
 }
