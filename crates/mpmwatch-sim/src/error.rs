@@ -51,6 +51,16 @@ pub enum SimError {
         /// Its value.
         value: f64,
     },
+    /// A concealed scenario whose closed loop runs away at every strength tried: no case.
+    #[error(
+        "scenario `{case}`: the loop runs away at every strength tried (no run whose effect stays under {limit:e} times the disturbance's variance), so it is no concealed case"
+    )]
+    Runaway {
+        /// The scenario's name.
+        case: String,
+        /// The largest effect-to-disturbance variance ratio a run may reach.
+        limit: f64,
+    },
     /// The output table could not be built.
     #[error(transparent)]
     Table(#[from] mpmwatch_core::io::TableError),

@@ -2,15 +2,16 @@
 //! `WIDE=count` drawn by `wide_specs`, with the grey-box structures explaining the outputs the
 //! dithers flag (`GREYBOX=1`) or the residual corrections (default). Ignored; `SEED=100
 //! cargo test -p mpmwatch-diagnose --test it closed_loop_study -- --ignored --nocapture` prints
-//! one line per case (with the held-out FIT of the true plant driven by the recorded MVs, the
-//! most a finding could reach: under feedback it can lie below the nominal's) and the rates,
-//! split by whether the true plant raises the held-out FIT by the closed-loop margin
-//! (`VERBOSE=1` adds each case's draw, the locating statistics
+//! one line per case (with the held-out FIT of the true plant driven by the recorded MVs, what
+//! a right finding would show: under feedback it can lie below the nominal's) and the rates,
+//! split by whether the true plant raises the held-out FIT by the closed-loop margin; a draw
+//! whose loop runs away is left out (`VERBOSE=1` adds each case's draw, the locating statistics
 //! of its changed channel (MI and cross-correlation; not the dither-projection test) and every
 //! finding's candidates; `GATE=a,b` sets the honesty gate's two margins, in points:
 //! `min_gain_pct` and `closed_loop_min_gain_pct`).
 
 use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered, fit_pct};
+use mpmwatch_sim::SimError;
 use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
 
 /// `GATE=a,b`: the honesty gate's `min_gain_pct` (here the small, consistent gain's margin
@@ -62,10 +63,11 @@ fn closed_loop_study() {
         // A draw whose loop runs away at every strength is no case (`scenarios::run`).
         let rec = match run(&spec) {
             Ok(rec) => rec,
-            Err(e) => {
+            Err(e @ SimError::Runaway { .. }) => {
                 eprintln!("{:<28} skipped: {e}", spec.name);
                 continue;
             }
+            Err(e) => panic!("{}: {e}", spec.name),
         };
         if verbose {
             eprintln!(
@@ -114,7 +116,7 @@ fn closed_loop_study() {
                 }
             }
         }
-        // What the true plant does to the held-out FIT: the ceiling of any finding's gain.
+        // What the true plant does to the held-out FIT: what a right finding would show.
         let tail = d.report.holdout.start_index..rec.y[cj].len();
         let truth = fit_pct(&rec.y[cj][tail.clone()], &rec.plant_output[cj][tail]);
         if spec.effect.is_mismatch() {

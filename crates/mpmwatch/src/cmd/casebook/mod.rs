@@ -10,6 +10,7 @@ mod real;
 use anyhow::Context;
 use mpmwatch::report::figures::{BeforeAfter, write_before_after_chart};
 use mpmwatch_diagnose::{DiagnoseOptions, Physics, diagnose_numbered};
+use mpmwatch_sim::SimError;
 use mpmwatch_sim::scenarios::{casebook_specs, run as run_case, wide_specs};
 use serde_json::json;
 
@@ -73,12 +74,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     md.push_str("| case | true effect | effect/disturbance variance | channel found | physics named | held-out FIT before → after | did the CCF see it? |\n| --- | --- | --- | --- | --- | --- | --- |\n");
     let (mut named, mut chan, mut total, mut false_alarms, mut quiet, mut fell) = (0, 0, 0, 0, 0, 0);
     let mut fit_items = Vec::new();
+    // The cases that ran, for the figure links.
+    let mut ran: Vec<&str> = Vec::new();
     for (k, spec) in specs.iter().enumerate() {
         eprintln!("[{}/{}] {} (seed {})", k + 1, specs.len(), spec.name, spec.seed);
         // A wide draw whose loop runs away at every strength is no case; it is said and left out.
         let rec = match run_case(spec) {
             Ok(rec) => rec,
-            Err(e) => {
+            Err(e @ SimError::Runaway { .. }) => {
                 eprintln!("  skipped: {e}");
                 md.push_str(&format!(
                     "| {} | {}: skipped, {} | — | — | — | — | — |\n",
@@ -86,9 +89,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     spec.effect.physics(),
                     e.to_string().replace('|', "\\|")
                 ));
+                rows.push(json!({"case": spec, "skipped": e.to_string()}));
                 continue;
             }
+            Err(e) => return Err(e.into()),
         };
+        ran.push(spec.name.as_str());
         let dg = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &opts)?;
         let (ci, cj) = spec.channel;
         let truth_in = format!("u{}", ci + 1);
@@ -192,11 +198,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         md.push_str("![held-out FIT before and after, per case](figures/casebook_fit.png)\n\n");
         md.push_str("Triangle: physics named right (null cases: no finding); cross: wrong physics, or a finding on a null case. Green: FIT rose; red: it fell.\n\n");
         md.push_str("Each case's held-out tail (last 200 samples of the output that carries the effect; recorded, simulated, corrected): ");
-        let links: Vec<String> = specs
+        let links: Vec<String> = ran
             .iter()
-            .map(|s| {
-                format!("[{}](figures/case_{}.png)", s.name.split('_').next().unwrap_or_default(), s.name)
-            })
+            .map(|name| format!("[{}](figures/case_{name}.png)", name.split('_').next().unwrap_or_default()))
             .collect();
         md.push_str(&links.join(" · "));
         md.push_str(".\n\n");
