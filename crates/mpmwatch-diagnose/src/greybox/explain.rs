@@ -67,8 +67,8 @@ use std::collections::BTreeMap;
 
 use super::clip_sensor::ClipSensor;
 use super::{
-    Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, drift_gain, elements, fit,
-    linear_orders, max_dead_time, nominal_cv_fit, pinned, starting_at,
+    Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, drift_gain, drift_is_one_line,
+    elements, fit, linear_orders, max_dead_time, nominal_cv_fit, pinned, starting_at,
 };
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
@@ -168,7 +168,8 @@ pub fn explain(
         Some(l) if d.noise_order == 0 && drift_min_gain.is_finite() => drift_gain(d, folds, l),
         _ => None,
     };
-    let drift = with_drift.is_some_and(|g| g >= drift_min_gain);
+    let drift = with_drift.is_some_and(|g| g >= drift_min_gain)
+        && linear.as_ref().is_some_and(|l| drift_is_one_line(d, folds, &l.0));
     let beside = if drift { Beside::Drift } else { Beside::Nothing };
     if drift {
         linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside, None), true);

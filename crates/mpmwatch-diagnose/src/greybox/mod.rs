@@ -645,7 +645,8 @@ pub fn elements() -> Vec<Box<dyn Element>> {
 }
 
 pub use cv::{
-    Beside, CvScore, cv_fit, drift_gain, linear_orders, max_dead_time, nominal_cv_fit, starting_at,
+    Beside, CvScore, cv_fit, drift_gain, drift_is_one_line, linear_orders, max_dead_time, nominal_cv_fit,
+    starting_at,
 };
 pub use explain::{Explanation, Names, explain};
 pub use linear::Linear;
