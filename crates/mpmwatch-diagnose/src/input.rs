@@ -58,9 +58,10 @@ pub struct DiagnoseOptions {
     pub closed_loop_min_gain_pct: f64,
     /// Open loop: points of cross-validated FIT a drift term (a straight line in time) must add
     /// to the re-fitted linear model, on average over the blocks, for every grey-box structure
-    /// and the nominal's reference to carry one: an output drifting in a way no input carries
-    /// bends every re-fit otherwise (`greybox::drift_gain`). Default 1.0; `f64::INFINITY`
-    /// never fits a drift.
+    /// and the nominal's reference to carry one, the drift also going the same way over both
+    /// halves of the training part: an output drifting in a way no input carries bends every
+    /// re-fit otherwise (`greybox::drift_gain`, `greybox::drift_is_one_line`). Default 1.0;
+    /// `f64::INFINITY` never fits a drift.
     pub drift_min_gain_pct: f64,
     /// Samples skipped at the start of every fit (initial transients; default 20).
     pub warmup: usize,

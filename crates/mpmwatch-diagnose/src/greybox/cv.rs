@@ -2,8 +2,8 @@
 //! each validation block simulated by a model fitted on the other rows and scored against its
 //! own mean, with the one-step prediction error under the fit's noise model beside it (the
 //! ranking currency on a dithered record); the linear re-fit's orders chosen that way; and
-//! whether the output drifts ([`drift_gain`]), with the nominal's reference then carrying the
-//! same line ([`Beside`]).
+//! whether the output drifts ([`drift_gain`], [`drift_is_one_line`]), with the nominal's
+//! reference then carrying the same line ([`Beside`]).
 
 use super::{Data, Linear, Model, Orders, Reading, TREND_UNIT, fit};
 use crate::fitness::fit_pct;
@@ -270,7 +270,8 @@ pub fn linear_orders(
 /// halves, by amounts a half-record's fit leaves noisy (on a development ramp one half kept
 /// 6 % of the whole's rate, docs/diagnose-history.md, stop 56), so only the direction is
 /// asked; the slow level a nonlinearity leaves the linear re-fit to follow (a tank that fills
-/// and overflows) rises on one half and falls on the other. A fit that fails says no.
+/// and overflows) rises on one half and falls, or stays flat, on the other. A fit that fails,
+/// or a drift of exactly zero, says no.
 pub fn drift_is_one_line(
     d: &Data<'_>,
     folds: &[(Vec<usize>, std::ops::Range<usize>)],
@@ -357,11 +358,12 @@ mod tests {
             .collect()
     }
 
-    /// A ramp over the record is one line; a level that rises over the first half and falls
-    /// back over the second (what a store that fills and overflows leaves behind a linear
-    /// re-fit) is not. A first-order plant on a square wave, white measurement noise at 0.2 of
-    /// the plant's swing, ten seeds each: every ramp passes; a level that peaks at 70 % of the
-    /// record and falls back by a fifth never does.
+    /// A ramp over the record is one line; a level that rises on one half and falls on the
+    /// other (what a store that fills and overflows can leave behind a linear re-fit) is not.
+    /// A first-order plant on a ±1 staircase held 37 samples, white measurement noise uniform
+    /// on ±0.1, ten seeds each: every ramp passes; a level that peaks at 70 % of the record and
+    /// falls back by a fifth never does, nor its mirror image in time (a short rise, then a
+    /// long fall), which only the first half's direction rejects.
     #[test]
     fn a_drift_must_be_one_line_over_the_record() {
         use rand::{Rng, SeedableRng};
@@ -386,6 +388,10 @@ mod tests {
             assert!(
                 !one_line(&|s| 1.3 * (std::f64::consts::PI * s / 1.4).sin(), seed),
                 "a rise and fall read as a line (seed {seed})"
+            );
+            assert!(
+                !one_line(&|s| 1.3 * (std::f64::consts::PI * (1.0 - s) / 1.4).sin(), seed),
+                "a fall and rise read as a line (seed {seed})"
             );
         }
     }

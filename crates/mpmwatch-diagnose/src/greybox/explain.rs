@@ -33,7 +33,8 @@
 //! Before any of it, on an open-loop record: when a drift term raises the re-fitted linear
 //! model's cross-validated FIT by the caller's drift margin ([`super::drift_gain`]) and the
 //! drift goes one way over both halves of the training part ([`super::drift_is_one_line`]: the
-//! slow level a nonlinearity leaves the re-fit to follow can go up, then down), every
+//! slow level a nonlinearity leaves the re-fit to follow can rise on one half and fall, or
+//! stay flat, on the other), every
 //! structure carries one and the nominal's reference becomes the nominal plus a constant and
 //! a line fitted on each fold's fit rows ([`super::Beside::Drift`]), so a finding is credited
 //! with what it explains beside the drift and the level. A drift no input carries cannot be

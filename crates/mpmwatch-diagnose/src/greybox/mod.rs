@@ -14,7 +14,7 @@
 //! ```
 //!
 //! The drift term `δ` is a nuisance every structure carries when the output drifts in a way
-//! no input carries ([`Orders::trend`], decided by [`drift_gain`]).
+//! no input carries ([`Orders::trend`], decided by [`drift_gain`] and [`drift_is_one_line`]).
 //!
 //! Fitting (see [`fit`]; the noise model in [`noise`]): least squares on the equation error
 //! gives the start (the recorded output stands in for `x` on the rows where the output map is

@@ -73,7 +73,9 @@ pub struct Args {
     /// Open loop: an output may drift in a way no input carries (a sensor's drift, a slow
     /// unmeasured load), and a drift bends every re-fit. When a straight line in time added to
     /// the re-fitted linear model raises its FIT on held-back training data by this many points
-    /// on average, every hypothesis and the model's reference carry one, and the finding says
+    /// on average, and goes the same way fitted on either half of the training part (the slow
+    /// level a nonlinear plant leaves behind a linear re-fit does not), every hypothesis and
+    /// the model's reference carry one, and the finding says
     /// so; the corrected simulation holds the drift at its last training level over the
     /// held-out tail (a drift cannot be forecast). Without a drift, a disturbance with a time
     /// constant of 10 samples passes 1 point on about one record in twenty, a slower one more
