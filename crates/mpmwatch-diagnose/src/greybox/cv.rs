@@ -279,11 +279,10 @@ pub fn drift_is_one_line(
 ) -> bool {
     let m = Model { element: &Linear, input: 0, orders: Orders { trend: true, ..linear.clone() } };
     let rows: Vec<usize> = folds.iter().flat_map(|f| f.1.clone()).collect();
-    let rate = |r: &[usize]| {
-        fit(&m, d, r).and_then(|f| m.drift_over(&f, &d.u, d.y, r)).map(|rise| rise / r.len().max(1) as f64)
-    };
+    // Only the direction is compared, so the rise over each part stands for its rate.
+    let rise = |r: &[usize]| fit(&m, d, r).and_then(|f| m.drift_over(&f, &d.u, d.y, r));
     let (half_a, half_b) = rows.split_at(rows.len() / 2);
-    match (rate(&rows), rate(half_a), rate(half_b)) {
+    match (rise(&rows), rise(half_a), rise(half_b)) {
         (Some(all), Some(a), Some(b)) => a * all > 0.0 && b * all > 0.0,
         _ => false,
     }
@@ -358,6 +357,17 @@ mod tests {
             .collect()
     }
 
+    /// The drift tests' plant: `x(t) = 0.9 x(t−1) + 0.1 u(t−1)` driven by a ±1 staircase held
+    /// 37 samples, `n` rows; returns `(u, x)`.
+    fn staircase_plant(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let u: Vec<f64> = (0..n).map(|t| if (t / 37 * 7919) % 11 < 5 { 1.0 } else { -1.0 }).collect();
+        let mut x = vec![0.0; n];
+        for t in 1..n {
+            x[t] = 0.9 * x[t - 1] + 0.1 * u[t - 1];
+        }
+        (u, x)
+    }
+
     /// A ramp over the record is one line; a level that rises on one half and falls on the
     /// other (what a store that fills and overflows can leave behind a linear re-fit) is not.
     /// A first-order plant on a ±1 staircase held 37 samples, white measurement noise uniform
@@ -369,11 +379,7 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let n = 2100;
         let folds = three_folds();
-        let u: Vec<f64> = (0..n).map(|t| if (t / 37 * 7919) % 11 < 5 { 1.0 } else { -1.0 }).collect();
-        let mut x = vec![0.0; n];
-        for t in 1..n {
-            x[t] = 0.9 * x[t - 1] + 0.1 * u[t - 1];
-        }
+        let (u, x) = staircase_plant(n);
         let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
         let one_line = |level: &dyn Fn(f64) -> f64, seed: u64| {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -414,11 +420,7 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let n = 2100;
         let folds = three_folds();
-        let u: Vec<f64> = (0..n).map(|t| if (t / 37 * 7919) % 11 < 5 { 1.0 } else { -1.0 }).collect();
-        let mut x = vec![0.0; n];
-        for t in 1..n {
-            x[t] = 0.9 * x[t - 1] + 0.1 * u[t - 1];
-        }
+        let (u, x) = staircase_plant(n);
         let uniform = |rng: &mut rand_chacha::ChaCha8Rng| (rng.random::<f64>() - 0.5) * 12f64.sqrt();
         let gain = |y: &[f64]| {
             let d = Data { u: vec![&u], y, train: 0..n, nominal: None, noise_order: 0 };
