@@ -5,6 +5,7 @@
 //! residual of a flagged output ([`crate::select`]), chosen by their one-step prediction error in
 //! a closed loop and gated by [`crate::decide`].
 
+use crate::Progress;
 use crate::candidates::Physics;
 use crate::decide::decide;
 use crate::fitness::fit_pct;
@@ -37,6 +38,7 @@ pub(crate) fn explain(
     opts: &DiagnoseOptions,
     plan: &Plan<'_>,
     located: &Located,
+    progress: &mut dyn FnMut(Progress<'_>),
 ) -> Explained {
     let mut findings = Vec::new();
     let mut corrected: Vec<Vec<f64>> = input.simulated.iter().map(|s| s.values.to_vec()).collect();
@@ -65,6 +67,11 @@ pub(crate) fn explain(
             flagged = (0..input.inputs.len()).collect();
         }
         let s0 = input.simulated[j].values;
+        progress(Progress::Explaining {
+            output: input.outputs[j].name,
+            index: cv + 1,
+            of: plan.testable.len(),
+        });
         let (mut finding, corrected_j, curve) = if greybox_path {
             let e = by_structures(input, opts, plan, cv, j, &flagged, open_loop);
             if quiet && e.finding.physics == Physics::Unexplained && !e.withheld {

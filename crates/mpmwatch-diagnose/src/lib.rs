@@ -118,11 +118,42 @@ pub fn diagnose_numbered(
     diagnose(&input, opts)
 }
 
+/// A stage of [`diagnose_with_progress`], reported as it starts: on a long record each can take
+/// minutes, and the explaining of an output (fitting every candidate on every fold) most.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress<'a> {
+    /// The locating tests start on the training part's `rows`.
+    Locating {
+        /// Training rows.
+        rows: usize,
+    },
+    /// Output `output` is being explained, the `index`-th (from 1) of the `of` outputs tested.
+    Explaining {
+        /// The output's name.
+        output: &'a str,
+        /// Its place among the tested outputs, from 1.
+        index: usize,
+        /// How many outputs are tested.
+        of: usize,
+    },
+}
+
 /// Runs the whole diagnosis: plan, locate, explain, and the report.
 pub fn diagnose(input: &DiagnoseInput<'_>, opts: &DiagnoseOptions) -> Result<Diagnosis, DiagnoseError> {
+    diagnose_with_progress(input, opts, &mut |_| {})
+}
+
+/// [`diagnose`], telling `progress` as each stage starts (the command line prints it).
+pub fn diagnose_with_progress(
+    input: &DiagnoseInput<'_>,
+    opts: &DiagnoseOptions,
+    progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<Diagnosis, DiagnoseError> {
     let plan = plan::plan(input, opts)?;
+    progress(Progress::Locating { rows: plan.n_train });
     let located = locate::locate(input, opts, &plan)?;
-    let explain::Explained { findings, corrected, curves } = explain::explain(input, opts, &plan, &located);
+    let explain::Explained { findings, corrected, curves } =
+        explain::explain(input, opts, &plan, &located, progress);
     let (n_train, ts) = (plan.n_train, plan.ts);
     let mismatch = located.any();
     let locate::Located { matrix, states, channels, .. } = located;

@@ -98,8 +98,28 @@ fn closed_loop_study() {
         if verbose {
             for c in d.report.channels.iter().filter(|c| c.input == tin && c.output == tout) {
                 eprintln!(
-                    "    locate {}→{}: MI {:.4} bits, limit {:.4}, {}, cross-correlation {}",
-                    c.input, c.output, c.norm_mi_bits, c.threshold_bits, c.verdict, c.ccf_significant
+                    "    locate {}→{}: MI {:.4} bits, limit {:.4}, {}, cross-correlation {}, projection R² {:.4}, limit {:.4}",
+                    c.input,
+                    c.output,
+                    c.norm_mi_bits,
+                    c.threshold_bits,
+                    c.verdict,
+                    c.ccf_significant,
+                    c.projection_r2,
+                    c.projection_critical
+                );
+            }
+            for c in d.matrix.iter().flat_map(|m| &m.cells).filter(|c| c.significant) {
+                eprintln!(
+                    "    decided u{}→y{}: {:?} at lag {:?}, p {:.2e} at alpha {:?}, value {:.4} against {:.4}",
+                    c.mv + 1,
+                    c.cv + 1,
+                    c.decision.evidence,
+                    c.decision.lag,
+                    c.decision.p_value,
+                    c.decision.alpha,
+                    c.decision.value,
+                    c.decision.critical
                 );
             }
             for g in &d.report.findings {

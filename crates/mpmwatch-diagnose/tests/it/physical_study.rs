@@ -33,7 +33,7 @@
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
-use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose};
+use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose, fit_pct};
 use mpmwatch_sim::physical_cases::{
     PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_of, run_with,
 };
@@ -321,14 +321,19 @@ fn study() {
                     None => format!("{} {:.1} %", b.signal, b.share_pct),
                 })
                 .collect();
+            // What the true plant, noise-free, does on the held-out tail: what a right finding
+            // could show at best.
+            let tail = d.report.holdout.start_index..r.y.len();
+            let truth = fit_pct(&r.y[tail.clone()], &r.plant[tail]);
             eprintln!(
-                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} | {} | tried {:?} | beyond {:?}",
+                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} (the true plant {:6.1}) | {} | tried {:?} | beyond {:?}",
                 case.name(),
                 if ok { "ok" } else { "NO" },
                 if o.on_output { format!("{} (output)", o.physics) } else { o.physics.to_string() },
                 o.before,
                 o.after,
                 if fell { " FELL" } else { "" },
+                truth,
                 r.description,
                 best,
                 beyond

@@ -8,7 +8,9 @@ use mpmwatch::report::figures::{XySeries, write_xy_chart};
 use mpmwatch_core::detect::{Method, Signal};
 use mpmwatch_core::info::Lags;
 use mpmwatch_core::io::Table;
-use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Diagnosis, Scoring, diagnose};
+use mpmwatch_diagnose::{
+    DiagnoseInput, DiagnoseOptions, Diagnosis, Progress, Scoring, diagnose_with_progress,
+};
 
 /// Arguments of the verb (documented on the verb in `main.rs`).
 #[derive(clap::Args)]
@@ -192,7 +194,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         alpha: args.alpha,
         ..DiagnoseOptions::default()
     };
-    let dg = diagnose(&input, &opts)?;
+    // Progress on stderr, so that a long record's minutes are not silent and stdout keeps the
+    // finding alone.
+    let start = std::time::Instant::now();
+    let elapsed = |start: std::time::Instant| format!("{:.0} s", start.elapsed().as_secs_f64());
+    let dg = diagnose_with_progress(&input, &opts, &mut |p| match p {
+        Progress::Locating { rows } => eprintln!(
+            "[{}] locating: testing every input→output channel on the {rows} training rows of {} ({} held out)",
+            elapsed(start),
+            rec.len(),
+            rec.len() - rows
+        ),
+        Progress::Explaining { output, index, of } => eprintln!(
+            "[{}] explaining {output} ({index} of {of}): fitting each candidate on every validation fold",
+            elapsed(start)
+        ),
+    })?;
+    eprintln!("[{}] done", elapsed(start));
     write_outputs(
         &dg,
         rec.time(),

@@ -85,7 +85,15 @@ fn report_json_matches_design_4_5() {
     let dir = scratch.path().to_path_buf();
     let out = diagnose_cli(&dir, &rec.u[0], &rec.d[0], &rec.y[0], &rec.s[0]);
     let (rep, cor) = (dir.join("r.json"), dir.join("c.csv"));
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // The stages on stderr, in order; stdout keeps the findings alone.
+    let stage = |s: &str| stderr.find(s).unwrap_or_else(|| panic!("no `{s}` on stderr: {stderr}"));
+    assert!(
+        stage("] locating: ") < stage("] explaining y1 (1 of 1)")
+            && stage("] explaining y1") < stage("] done")
+    );
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("locating"));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
     assert_eq!(v["mismatch"], true);
     let ch = &v["channels"][0];
