@@ -128,6 +128,8 @@ pub enum Progress<'a> {
         rows: usize,
     },
     /// Output `output` is being explained, the `index`-th (from 1) of the `of` outputs tested.
+    /// Only the outputs explained are told (in a closed loop, those the locating tests
+    /// flagged; in open loop, every one), so an index may be skipped.
     Explaining {
         /// The output's name.
         output: &'a str,

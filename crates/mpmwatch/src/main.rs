@@ -123,6 +123,9 @@ enum Verb {
     /// cases, 3000 samples name the physics in about 84 % of cases and 1500 in about 75 %
     /// (docs/diagnose-history.md, stop 45).
     ///
+    /// Progress: each stage as it starts goes to stderr with the seconds since the start
+    /// (locating, each output explained, done); stdout keeps the findings and FITs alone.
+    ///
     /// Example: mpmwatch diagnose --recorded rec.csv --simulated sim.csv --inputs u1,u2
     ///          --excitations d1,d2 --outputs y1,y2 --report diag.json --corrected corr.csv
     Diagnose(cmd::diagnose::Args),

@@ -321,8 +321,8 @@ fn study() {
                     None => format!("{} {:.1} %", b.signal, b.share_pct),
                 })
                 .collect();
-            // What the true plant, noise-free, does on the held-out tail: what a right finding
-            // could show at best.
+            // What the true plant, noise-free, does on the held-out tail: a reference for what a
+            // right finding can show (a fitted model may beat it on the tail by chance).
             let tail = d.report.holdout.start_index..r.y.len();
             let truth = fit_pct(&r.y[tail.clone()], &r.plant[tail]);
             eprintln!(

@@ -197,20 +197,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Progress on stderr, so that a long record's minutes are not silent and stdout keeps the
     // finding alone.
     let start = std::time::Instant::now();
-    let elapsed = |start: std::time::Instant| format!("{:.0} s", start.elapsed().as_secs_f64());
+    let elapsed = || format!("{:.0} s", start.elapsed().as_secs_f64());
     let dg = diagnose_with_progress(&input, &opts, &mut |p| match p {
         Progress::Locating { rows } => eprintln!(
             "[{}] locating: testing every input→output channel on the {rows} training rows of {} ({} held out)",
-            elapsed(start),
+            elapsed(),
             rec.len(),
             rec.len() - rows
         ),
         Progress::Explaining { output, index, of } => eprintln!(
             "[{}] explaining {output} ({index} of {of}): fitting each candidate on every validation fold",
-            elapsed(start)
+            elapsed()
         ),
     })?;
-    eprintln!("[{}] done", elapsed(start));
     write_outputs(
         &dg,
         rec.time(),
@@ -221,6 +220,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &args.corrected,
         args.figures.as_deref(),
     )?;
+    eprintln!("[{}] done", elapsed());
     for f in &dg.report.findings {
         println!("{} → {}: {} — {}", f.input, f.output, f.physics.name(), f.summary);
         if f.physics == mpmwatch_diagnose::Physics::Unexplained
