@@ -285,11 +285,11 @@ mod tests {
 
     /// The level on residuals that share nothing with the dither: a slow AR(2) disturbance,
     /// binary and uniform dithers, 1500 rows, thirty elements without feedback and thirty with.
-    /// At the measured level, about 0.15 % per element (docs/diagnose.md; the release study
+    /// At the measured level, 0.1 to 0.2 % per element (docs/diagnose.md; the release study
     /// below: `PROJ_COUNT=4000 cargo test --release -p mpmwatch-diagnose --lib
     /// projection_null_study -- --ignored --nocapture`), three alarms in sixty have probability
-    /// 1·10⁻⁴; at 5 % per element, a test far off its level, 58 %. A coarse guard in the suite;
-    /// the figure is the study's.
+    /// under 3·10⁻⁴; at 5 % per element, a test far off its level, 58 %. A coarse guard in the
+    /// suite; the figure is the study's.
     #[test]
     fn the_projection_test_holds_its_level_on_a_residual_the_dither_does_not_reach() {
         let alarms = null_alarms(1500, 1, 30, false) + null_alarms(1500, 31, 30, true);
