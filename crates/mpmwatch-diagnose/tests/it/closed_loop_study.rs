@@ -109,11 +109,17 @@ fn closed_loop_study() {
                     c.projection_critical
                 );
             }
-            for c in d.matrix.iter().flat_map(|m| &m.cells).filter(|c| c.significant) {
+            // `cv` counts the tested residuals, which the matrix names.
+            for (m, c) in d
+                .matrix
+                .iter()
+                .flat_map(|m| m.cells.iter().map(move |c| (m, c)))
+                .filter(|(_, c)| c.significant)
+            {
                 eprintln!(
-                    "    decided u{}→y{}: {:?} at lag {:?}, p {:.2e} at alpha {:?}, value {:.4} against {:.4}",
+                    "    decided u{}→{}: {:?} at lag {:?}, p {:.2e} at alpha {:?}, value {:.4} against {:.4}",
                     c.mv + 1,
-                    c.cv + 1,
+                    m.residuals[c.cv],
                     c.decision.evidence,
                     c.decision.lag,
                     c.decision.p_value,
