@@ -206,14 +206,17 @@ pub fn explain(
             if linear.as_ref().is_none_or(|l| rank(&v) > rank(&l.1)) {
                 linear = Some((from_nominal.clone(), v));
             }
-            order_sets.push(from_nominal);
+            order_sets.push(from_nominal.clone());
         }
     }
     let mut tried: Vec<Tried> = Vec::new();
     let mut scored: Vec<Scored> = Vec::new();
     let els = elements();
+    // Last: the static linear part only elements that carry the dynamics are tried behind.
+    let static_part = order_sets.len();
+    order_sets.push(Orders { na: 0, nb: 1, ..from_nominal.clone() });
     for (o, orders) in order_sets.iter().enumerate() {
-        for (k, el) in els.iter().enumerate() {
+        for (k, el) in els.iter().enumerate().filter(|(_, el)| o < static_part || el.carries_dynamics()) {
             let inputs: Vec<usize> = match el.acts_on() {
                 ActsOn::Input => flagged.to_vec(),
                 ActsOn::Output => flagged.iter().take(1).copied().collect(),

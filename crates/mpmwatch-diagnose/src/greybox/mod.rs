@@ -44,6 +44,7 @@ mod sensor_polynomial;
 mod stiffness;
 mod storage_limit;
 mod structure;
+mod tank_cascade;
 
 use std::collections::BTreeMap;
 
@@ -114,6 +115,14 @@ pub trait Element: Sync {
     /// linear part's poles with the operating point instead, which is not read here.
     fn poles(&self, _p: &[f64]) -> Vec<f64> {
         Vec::new()
+    }
+    /// Whether the element's own stores can carry all of the plant's dynamics (a tank cascade):
+    /// it is then also tried behind a static linear part, no poles and one tap per input at the
+    /// nominal's dead time, which the linear orders searched for a linear model would not give
+    /// it (a linear model follows slow stores with poles and long dead times that an element
+    /// with the stores needs none of). False by default.
+    fn carries_dynamics(&self) -> bool {
+        false
     }
     /// The signals the linear dynamics see, each with its own numerator: by default the inputs.
     /// `i` is the input the element acts on.
@@ -631,6 +640,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
         Box::new(saturation::InputSaturation),
         Box::new(storage_limit::StorageLimit),
         Box::new(draining_tank::DrainingTank),
+        Box::new(tank_cascade::TankCascade),
         Box::new(clip_sensor::ClipSensor { range: None }),
         Box::new(abs_sensor::AbsSensor),
         Box::new(sensor_polynomial::SensorPolynomial),
