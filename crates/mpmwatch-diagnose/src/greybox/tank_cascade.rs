@@ -7,7 +7,8 @@
 //! when the held-out rows sit at other levels.
 //!
 //! Two things make it a model of the tanks rather than one more element on the linear orders:
-//! the levels the record starts from are fitted (`u0` below), and the element is also tried
+//! the levels the record starts from are fitted, from where its first outputs put them (`u0`
+//! below), and the element is also tried
 //! behind a static linear part ([`Element::carries_dynamics`]), since its two stores are the
 //! dynamics. Without them the same cascade named one more development tank than the single
 //! tank and was dropped (docs/diagnose-history.md, stops 53 and 58).
@@ -15,21 +16,24 @@
 use crate::describe::num;
 use std::collections::BTreeMap;
 
-use mpmwatch_core::numerics::quantile;
+use mpmwatch_core::numerics::{least_squares_rows, quantile};
 
 use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
 /// `k2²·h2(t)/ū` of the cascade `h1(t) = clamp(h1 + u − k1·√h1, 0, rim)`,
-/// `h2(t) = max(h2 + k1·√h1 − k2·√h2, 0)`, parameters `[ū, k1, rim, k2, u0]`, `ū` the mean
-/// training inflow (fixed), both tanks settled at the inflow `u0` when the record starts. The
-/// scale makes the settled signal `u²/ū` below the rim, of the input's own order, whatever the
-/// orifices. Tried only on an input that never goes negative on the training rows: an inflow.
+/// `h2(t) = max(h2 + k1·√h1 − k2·√h2, 0)`, parameters `[ū, u0, k1, rim, k2]`, `ū` the mean
+/// training inflow (fixed) and `u0` the inflow both tanks are settled at when the record
+/// starts. The scale makes the settled signal `u²/ū` below the rim,
+/// of the input's own order, whatever the orifices. Tried only on an input that never goes
+/// negative on the training rows: an inflow.
 ///
-/// Why `u0` is fitted: a tank's time constant can be a good part of the record, so the levels
-/// it starts from shape the first hundreds of samples. They are what the inputs before the
-/// record left, which the record does not show; settled at some inflow is the one-parameter
-/// guess a plant at rest before the record makes right.
+/// Why `u0`: a tank's time constant can be a good part of the record, so the levels it starts
+/// from shape the first hundreds of samples. They are what the inputs before the record left,
+/// which the record does not show; settled at some inflow is the one-parameter guess a plant at
+/// rest before the record makes right. It starts where the record's first outputs put it
+/// ([`starting_inflow`]) and is refined by the fit: a fold that holds out the first block has
+/// no row that depends on it, and started at the mean inflow it wandered there.
 pub struct TankCascade;
 
 /// Euler steps per sample, as [`super::draining_tank`]'s and for the same reason.
@@ -59,6 +63,35 @@ fn levels(u: &[f64], k1: f64, rim: f64, k2: f64, u0: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The element's signal, `k2²·h2/ū`, for `[ū, k1, rim, k2]` from tanks settled at `u0`.
+fn signal(u: &[f64], [mean, k1, rim, k2]: [f64; 4], u0: f64) -> Vec<f64> {
+    let scale = k2 * k2 / mean;
+    levels(u, k1, rim, k2, u0).iter().map(|h| scale * h.1).collect()
+}
+
+/// The inflow the tanks were settled at when the record started, for the tanks `tanks`
+/// (`[ū, k1, rim, k2]`): the one whose settled signal, `u0²/ū` whatever the orifices, reads as
+/// the record's first [`STARTING_ROWS`] outputs through the scale and offset that fit the
+/// training output by least squares (with the tanks started at `ū`), within the training
+/// inputs' range; `ū` when the fit gives no positive scale.
+fn starting_inflow(d: &Data<'_>, i: usize, tanks: [f64; 4]) -> f64 {
+    let (lo, hi) = (d.u_quantile(i, 0.0), d.u_quantile(i, 1.0));
+    let mean = tanks[0];
+    let x = signal(d.u[i], tanks, mean);
+    let ones = vec![1.0; d.y.len()];
+    let rows: Vec<usize> = d.train.clone().collect();
+    let Some(c) = least_squares_rows(&[&x, &ones], d.y, &rows).filter(|c| c[0] > 0.0) else {
+        return mean;
+    };
+    let first = &d.y[..STARTING_ROWS.min(d.y.len())];
+    let y0 = first.iter().sum::<f64>() / first.len().max(1) as f64;
+    (mean * ((y0 - c[1]) / c[0]).max(0.0)).sqrt().clamp(lo, hi)
+}
+
+/// Outputs averaged for the level the record starts at: a few, so that noise on one row does
+/// not set it, and few enough that even a fast tank has hardly moved.
+const STARTING_ROWS: usize = 5;
+
 /// The orifice whose tank has time constant `tau` samples at inflow `u` (`2u/k²`).
 fn k_for(u: f64, tau: f64) -> f64 {
     (2.0 * u / tau).sqrt()
@@ -76,7 +109,8 @@ impl Element for TankCascade {
         d.u_quantile(i, 0.0) >= 0.0 && d.u_quantile(i, 1.0) > 0.0
     }
     /// Per time constant of [`TAUS`] (both tanks alike), a rim at the unbounded upper tank's
-    /// 80th and 90th training percentiles of level, the tanks settled at the mean inflow.
+    /// 80th and 90th training percentiles of level, and the starting inflow [`starting_inflow`]
+    /// reads for them.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
         let train = &d.u[i][d.train.clone()];
         let mean = train.iter().sum::<f64>() / train.len().max(1) as f64;
@@ -85,7 +119,9 @@ impl Element for TankCascade {
             let k = k_for(mean, tau);
             let h1: Vec<f64> = levels(d.u[i], k, f64::INFINITY, k, mean).iter().map(|h| h.0).collect();
             for q in [0.8, 0.9] {
-                out.push(vec![mean, k, quantile(&h1[d.train.clone()], q), k, mean]);
+                let rim = quantile(&h1[d.train.clone()], q);
+                let u0 = starting_inflow(d, i, [mean, k, rim, k]);
+                out.push(vec![mean, u0, k, rim, k]);
             }
         }
         out
@@ -98,23 +134,22 @@ impl Element for TankCascade {
     }
     /// Both tanks' poles at the mean inflow, `exp(−k²/(2ū))`.
     fn poles(&self, p: &[f64]) -> Vec<f64> {
-        vec![(-p[1] * p[1] / (2.0 * p[0])).exp(), (-p[3] * p[3] / (2.0 * p[0])).exp()]
+        vec![(-p[2] * p[2] / (2.0 * p[0])).exp(), (-p[4] * p[4] / (2.0 * p[0])).exp()]
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
-        let scale = p[3] * p[3] / p[0];
-        map_input(u, i, |x| levels(x, p[1], p[2], p[3], p[4]).iter().map(|h| scale * h.1).collect())
+        map_input(u, i, |x| signal(x, [p[0], p[2], p[3], p[4]], p[1]))
     }
     /// Where the upper level stands at the rim.
     fn acting(&self, p: &[f64], u: &[&[f64]], i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
-        Some(levels(u[i], p[1], p[2], p[3], p[4]).iter().map(|h| h.0 >= p[2]).collect())
+        Some(levels(u[i], p[2], p[3], p[4], p[1]).iter().map(|h| h.0 >= p[3]).collect())
     }
     /// The settled signal for an inflow held at `v`: `v²/ū` up to the rim's outflow `k1·√rim`,
     /// that outflow's beyond.
     fn map_at(&self, p: &[f64], _gamma: &[f64], v: f64) -> Option<f64> {
-        Some(v.max(0.0).min(p[1] * p[2].max(0.0).sqrt()).powi(2) / p[0])
+        Some(v.max(0.0).min(p[2] * p[3].max(0.0).sqrt()).powi(2) / p[0])
     }
     fn describe(&self, p: &[f64], input: &str, output: &str) -> (String, BTreeMap<String, f64>) {
-        let (mean, k1, rim, k2) = (p[0], p[1], p[2], p[3]);
+        let (mean, k1, rim, k2) = (p[0], p[2], p[3], p[4]);
         let (tau1, tau2) = (2.0 * mean / (k1 * k1), 2.0 * mean / (k2 * k2));
         let cap = k1 * rim.max(0.0).sqrt();
         (
@@ -132,7 +167,7 @@ impl Element for TankCascade {
                 ("lower_orifice".into(), k2),
                 ("upper_time_constant_samples".into(), tau1),
                 ("lower_time_constant_samples".into(), tau2),
-                ("starting_inflow".into(), p[4]),
+                ("starting_inflow".into(), p[1]),
             ]),
         )
     }
@@ -158,7 +193,7 @@ mod tests {
         assert!((h[0].1 - (0.1f64 / k2).powi(2)).abs() < 1e-12, "started settled: {:?}", h[0]);
         assert!((h[2999].0 - (0.5f64 / k1).powi(2)).abs() < 1e-9, "{:?}", h[2999]);
         assert!((h[2999].1 - (0.5f64 / k2).powi(2)).abs() < 1e-9, "{:?}", h[2999]);
-        let p = [mean, k1, 2.0, k2, 0.1];
+        let p = [mean, 0.1, k1, 2.0, k2];
         let s = TankCascade.signals(&p, &[&step(0.3)], 0);
         assert!((s[0][2999] - 0.09 / mean).abs() < 1e-9, "{}", s[0][2999]);
         let cap = k1 * 2f64.sqrt();
@@ -181,7 +216,7 @@ mod tests {
     fn a_noise_free_overflowing_cascade_is_recovered() {
         let u: Vec<f64> = (0..1500).map(|t| 0.1 + ((t / 60 * 7919) % 13) as f64 / 10.0).collect();
         let mean = u.iter().sum::<f64>() / u.len() as f64;
-        let p = [mean, 0.3, 9.0, 0.25, 0.7];
+        let p = [mean, 0.7, 0.3, 9.0, 0.25];
         assert!(
             levels(&u, 0.3, 9.0, 0.25, 0.7).iter().filter(|h| h.0 >= 9.0).count() > 100,
             "the rim must be reached"
@@ -196,8 +231,8 @@ mod tests {
         };
         let rows: Vec<usize> = (10..1500).collect();
         let f = fit(&m, &d, &rows).unwrap();
-        assert!((f.p[1] - 0.3).abs() < 1e-2 && (f.p[3] - 0.25).abs() < 1e-2, "{f:?}");
-        assert!((f.p[2] - 9.0).abs() < 0.1 && (f.p[4] - 0.7).abs() < 1e-2, "{f:?}");
+        assert!((f.p[2] - 0.3).abs() < 1e-2 && (f.p[4] - 0.25).abs() < 1e-2, "{f:?}");
+        assert!((f.p[3] - 9.0).abs() < 0.1, "{f:?}");
         assert!((f.theta[0] - 2.0).abs() < 1e-2 && (f.theta[1] - 1.0).abs() < 1e-2, "{f:?}");
     }
 }

@@ -371,7 +371,7 @@ fn study() {
 /// does for one seed. Prints, per class, how many records got a named finding (a false alarm
 /// of the physics) and how many an `unexplained` one (which says the model misses something:
 /// a false alarm in words, also on an output nothing flagged when a withheld correction passed
-/// the gate). Ignored; `SEEDS=a..b N=2000 cargo test --release -p
+/// the gate). `CASE=name` for one class. Ignored; `SEEDS=a..b N=2000 cargo test --release -p
 /// mpmwatch-diagnose --test it physical_study::no_change_study -- --ignored --exact
 /// --nocapture`.
 #[test]
@@ -379,7 +379,11 @@ fn study() {
 fn no_change_study() {
     let (a, b, n) = seeds_and_length(2000);
     let (mut named, mut unexplained, mut total) = (0, 0, 0);
+    let only = std::env::var("CASE").ok();
     for case in PhysicalCase::ALL {
+        if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str())) {
+            continue;
+        }
         let (mut case_named, mut case_unexplained) = (0, 0);
         for seed in a..b {
             let r = run_with(case, n, seed, signal()).unwrap();
