@@ -212,7 +212,7 @@ pub fn explain(
     let mut tried: Vec<Tried> = Vec::new();
     let mut scored: Vec<Scored> = Vec::new();
     let els = elements();
-    // Last: the static linear part only elements that carry the dynamics are tried behind.
+    // Last, the static linear part, tried only behind elements that carry the dynamics.
     let static_part = order_sets.len();
     order_sets.push(Orders { na: 0, nb: 1, ..from_nominal.clone() });
     for (o, orders) in order_sets.iter().enumerate() {
@@ -872,11 +872,12 @@ mod tests {
     /// upper tank overflowing at level 30, both settled at the first inflow when the record
     /// starts) on the settling tests' staircase lifted to inflows of 0.1 to 2.1, the lower level
     /// read a sample later as `y = 2·s + 1`, against the settling tests' first-order nominal.
-    /// The tanks' time constants at the mean inflow, 24 and 35 samples, settle within a block of
-    /// 350 and the rim binds on the high steps; the cascade, the only structure that is the
-    /// plant, is named, with its orifices. (On these orders the nominal's own linear part can be
-    /// static too, so this does not single out the static part the cascade is also tried behind;
-    /// the development tanks do, docs/diagnose-history.md, stop 58.)
+    /// The tanks' time constants at the mean inflow, 24 and 34 samples, settle within the
+    /// shortest block (348 rows) and the rim binds on the high steps; the cascade, the only
+    /// structure that is the plant, is named, with its orifices. (On these orders the nominal's
+    /// own linear part can be static too, so this does not single out the static part the
+    /// cascade is also tried behind; no measurement isolates that part, see
+    /// docs/diagnose-history.md, stop 58.)
     #[test]
     fn a_pair_of_tanks_is_named_with_its_orifices() {
         let u: Vec<f64> = staircase().iter().map(|v| v + 1.1).collect();

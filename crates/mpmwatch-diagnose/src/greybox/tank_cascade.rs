@@ -8,10 +8,9 @@
 //!
 //! Two things make it a model of the tanks rather than one more element on the linear orders:
 //! the levels the record starts from are fitted, from where its first outputs put them (`u0`
-//! below), and the element is also tried
-//! behind a static linear part ([`Element::carries_dynamics`]), since its two stores are the
-//! dynamics. Without them the same cascade named one more development tank than the single
-//! tank and was dropped (docs/diagnose-history.md, stops 53 and 58).
+//! below), and the element is also tried behind a static linear part
+//! ([`Element::carries_dynamics`]), since its two stores are the dynamics (what each was worth
+//! is in docs/diagnose-history.md, stops 53 and 58).
 
 use crate::describe::num;
 use std::collections::BTreeMap;
@@ -21,19 +20,22 @@ use mpmwatch_core::numerics::{least_squares_rows, quantile};
 use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
-/// `k2²·h2(t)/ū` of the cascade `h1(t) = clamp(h1 + u − k1·√h1, 0, rim)`,
-/// `h2(t) = max(h2 + k1·√h1 − k2·√h2, 0)`, parameters `[ū, u0, k1, rim, k2]`, `ū` the mean
-/// training inflow (fixed) and `u0` the inflow both tanks are settled at when the record
-/// starts. The scale makes the settled signal `u²/ū` below the rim,
-/// of the input's own order, whatever the orifices. Tried only on an input that never goes
-/// negative on the training rows: an inflow.
+/// `k2²·h2(t)/ū` of the cascade `dh1/dt = u − k1·√h1` (h1 held in `[0, rim]`),
+/// `dh2/dt = k1·√h1 − k2·√h2` (h2 ≥ 0), integrated in [`SUBSTEPS`] Euler steps a sample;
+/// parameters `[ū, u0, k1, rim, k2]`, `ū` the mean training inflow (fixed) and `u0` the inflow
+/// both tanks are settled at when the record starts. The scale makes the settled signal `u²/ū`
+/// below the rim, of the input's own order, whatever the orifices. Tried only on an input that
+/// never goes negative on the training rows: an inflow.
 ///
 /// Why `u0`: a tank's time constant can be a good part of the record, so the levels it starts
 /// from shape the first hundreds of samples. They are what the inputs before the record left,
 /// which the record does not show; settled at some inflow is the one-parameter guess a plant at
 /// rest before the record makes right. It starts where the record's first outputs put it
-/// ([`starting_inflow`]) and is refined by the fit: a fold that holds out the first block has
-/// no row that depends on it, and started at the mean inflow it wandered there.
+/// ([`starting_inflow`]) and is refined by the fit. A fold that holds out the first block has
+/// no fit row that depends on it, so there it stays near that start: the first block is then
+/// scored with a starting level read off its own first rows, as a linear simulation copies
+/// its initial conditions from the record (those rows, unlike the linear simulation's, are not
+/// trimmed from the score).
 pub struct TankCascade;
 
 /// Euler steps per sample, as [`super::draining_tank`]'s and for the same reason.
@@ -73,7 +75,8 @@ fn signal(u: &[f64], [mean, k1, rim, k2]: [f64; 4], u0: f64) -> Vec<f64> {
 /// (`[ū, k1, rim, k2]`): the one whose settled signal, `u0²/ū` whatever the orifices, reads as
 /// the record's first [`STARTING_ROWS`] outputs through the scale and offset that fit the
 /// training output by least squares (with the tanks started at `ū`), within the training
-/// inputs' range; `ū` when the fit gives no positive scale.
+/// inputs' range; `ū` when the fit gives no positive scale. A reading above the upper tank's
+/// spill (`k1·√rim`) is not capped there, though every inflow past it starts the tanks alike.
 fn starting_inflow(d: &Data<'_>, i: usize, tanks: [f64; 4]) -> f64 {
     let (lo, hi) = (d.u_quantile(i, 0.0), d.u_quantile(i, 1.0));
     let mean = tanks[0];
@@ -208,10 +211,12 @@ mod tests {
     }
 
     /// A noise-free cascade (orifices 0.3 and 0.25, the upper tank overflowing at level 9,
-    /// both settled at an inflow of 0.7 when the record starts), read through `y = 2·s + 1`, on a staircase of inflows in [0.1, 1.3] whose high steps
-    /// spill: the fit recovers the orifices, the rim and the output's scale and offset (zero
-    /// error at the truth; 1e-2 leaves room for the forward-difference Jacobian through two
-    /// tanks, as in the other elements' recovery tests).
+    /// both settled at an inflow of 0.7 when the record starts), read through `y = 2·s + 1`,
+    /// on a staircase of inflows in [0.1, 1.3] whose high steps spill: the fit recovers the
+    /// orifices, the rim and the output's scale and offset (zero error at the truth, whose
+    /// starting level the first outputs give exactly; 1e-2 leaves room for the
+    /// forward-difference Jacobian through two tanks, as in the other elements' recovery
+    /// tests).
     #[test]
     fn a_noise_free_overflowing_cascade_is_recovered() {
         let u: Vec<f64> = (0..1500).map(|t| 0.1 + ((t / 60 * 7919) % 13) as f64 / 10.0).collect();
