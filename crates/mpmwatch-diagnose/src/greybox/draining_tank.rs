@@ -22,11 +22,11 @@ pub struct DrainingTank;
 /// Euler steps per sample. With `τ = 2√h/k` the store's time constant in samples, its pole per
 /// step is `1 − 1/(4τ)` with four steps, positive down to τ = ¼ sample; with one step a sample
 /// it would be `1 − 1/τ`, negative (an oscillating level) for any τ under a sample.
-const SUBSTEPS: usize = 4;
+pub(super) const SUBSTEPS: usize = 4;
 
 /// Time constants (samples) at the mean inflow tried as starts, from a few samples to several
 /// hundred: a tank is often the slowest thing in a plant.
-const TAUS: [f64; 4] = [5.0, 25.0, 100.0, 400.0];
+pub(super) const TAUS: [f64; 4] = [5.0, 25.0, 100.0, 400.0];
 
 /// The tank's level per sample, from `u` (negative inflows count as none); NaN throughout for
 /// an orifice or rim that is not positive, which is no tank (a simulation built on it is
@@ -55,8 +55,14 @@ fn outflow(u: &[f64], k: f64, rim: f64) -> Vec<f64> {
 
 /// The orifice coefficient whose time constant at inflow `u` is `tau` samples: the linearised
 /// store `dh/dt = −(k/(2√h*))·δh` at `h* = (u/k)²` decays at `k²/(2u)` per sample.
-fn k_for(u: f64, tau: f64) -> f64 {
+pub(super) fn k_for(u: f64, tau: f64) -> f64 {
     (2.0 * u / tau).sqrt()
+}
+
+/// Whether input `i` is an inflow: never negative on the training rows, and not always zero.
+/// The tanks are tried only on one.
+pub(super) fn is_inflow(d: &Data<'_>, i: usize) -> bool {
+    d.u_quantile(i, 0.0) >= 0.0 && d.u_quantile(i, 1.0) > 0.0
 }
 
 impl Element for DrainingTank {
@@ -66,9 +72,8 @@ impl Element for DrainingTank {
     fn acts_on(&self) -> ActsOn {
         ActsOn::Input
     }
-    /// An inflow: never negative on the training rows, and not always zero.
     fn identifiable(&self, d: &Data<'_>, i: usize) -> bool {
-        d.u_quantile(i, 0.0) >= 0.0 && d.u_quantile(i, 1.0) > 0.0
+        is_inflow(d, i)
     }
     /// Per time constant of [`TAUS`], a rim at the unbounded tank's 80th and 90th training
     /// percentiles of level.

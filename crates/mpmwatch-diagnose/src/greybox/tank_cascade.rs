@@ -17,6 +17,7 @@ use std::collections::BTreeMap;
 
 use mpmwatch_core::numerics::{least_squares_rows, quantile};
 
+use super::draining_tank::{SUBSTEPS, TAUS, is_inflow, k_for};
 use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
@@ -37,12 +38,6 @@ use crate::candidates::{ActsOn, Physics};
 /// its initial conditions from the record (those rows, unlike the linear simulation's, are not
 /// trimmed from the score).
 pub struct TankCascade;
-
-/// Euler steps per sample, as [`super::draining_tank`]'s and for the same reason.
-const SUBSTEPS: usize = 4;
-
-/// Time constants (samples) at the mean inflow tried as starts, both tanks alike.
-const TAUS: [f64; 4] = [5.0, 25.0, 100.0, 400.0];
 
 /// Both tanks' levels per sample, from `u` (negative inflows count as none); NaN throughout for
 /// an orifice or rim that is not positive, which is no tank.
@@ -95,11 +90,6 @@ fn starting_inflow(d: &Data<'_>, i: usize, tanks: [f64; 4]) -> f64 {
 /// not set it, and few enough that even a fast tank has hardly moved.
 const STARTING_ROWS: usize = 5;
 
-/// The orifice whose tank has time constant `tau` samples at inflow `u` (`2u/k²`).
-fn k_for(u: f64, tau: f64) -> f64 {
-    (2.0 * u / tau).sqrt()
-}
-
 impl Element for TankCascade {
     fn physics(&self) -> Physics {
         Physics::Saturation
@@ -107,13 +97,12 @@ impl Element for TankCascade {
     fn acts_on(&self) -> ActsOn {
         ActsOn::Input
     }
-    /// An inflow: never negative on the training rows, and not always zero.
     fn identifiable(&self, d: &Data<'_>, i: usize) -> bool {
-        d.u_quantile(i, 0.0) >= 0.0 && d.u_quantile(i, 1.0) > 0.0
+        is_inflow(d, i)
     }
-    /// Per time constant of [`TAUS`] (both tanks alike), a rim at the unbounded upper tank's
-    /// 80th and 90th training percentiles of level, and the starting inflow [`starting_inflow`]
-    /// reads for them.
+    /// Per time constant of the single tank's [`TAUS`] (both tanks alike), a rim at the
+    /// unbounded upper tank's 80th and 90th training percentiles of level, and the starting
+    /// inflow [`starting_inflow`] reads for them.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
         let train = &d.u[i][d.train.clone()];
         let mean = train.iter().sum::<f64>() / train.len().max(1) as f64;
