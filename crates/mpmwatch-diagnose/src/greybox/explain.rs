@@ -16,7 +16,9 @@
 //! does within it; a slower mode sets the level the simulation carries from block to block,
 //! which no block checks and the held-out tail, longer than a block, exposes (a near-integrator
 //! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose-history.md, stop
-//! 42). A correction that does not settle is withheld, with its time constant.
+//! 42). A correction that does not settle is withheld, with its time constant. The poles of an
+//! element whose own stores carry the dynamics (a tank cascade) are not read: its slow modes'
+//! levels are set by its own law and its starting levels are fitted ([`settling_time`]).
 //!
 //! A named element must also act: an element with a kink (a limit, a dead zone) whose fitted
 //! kink lies where the record hardly goes, on fewer than [`MIN_ACTING`] of the training rows,
@@ -250,10 +252,6 @@ pub fn explain(
         mean: v.mean - nominal_cv.mean,
         worst: v.min_gain_over(&nominal_cv),
     };
-    let time_constant = |m: &Model<'_>, f: &Fitted| {
-        let r = m.slowest_pole(f);
-        if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() }
-    };
     if let Some((v, k, i, _, o)) = chosen(&scored, &rank)
         && rank(v) - linear_cv >= NONLINEAR_MARGIN
         && passes(v)
@@ -262,7 +260,7 @@ pub fn explain(
         let el = els[k].as_ref();
         let m = Model { element: el, input: i, orders: order_sets[o].clone() };
         if let Some(f) = fit(&m, d, &train_rows) {
-            let tau = time_constant(&m, &f);
+            let tau = settling_time(&m, &f);
             let settles = tau < block;
             if !settles {
                 withheld.push(held(el.physics(), Why::Slow(tau), v));
@@ -304,7 +302,7 @@ pub fn explain(
     {
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
         if let Some(f) = fit(&m, d, &train_rows) {
-            let tau = time_constant(&m, &f);
+            let tau = settling_time(&m, &f);
             let settles = tau < block;
             if !settles {
                 withheld.push(held(Physics::Unexplained, Why::Slow(tau), v));
@@ -347,7 +345,7 @@ pub fn explain(
                 mean: v.mean - raw.mean,
                 worst: v.min_gain_over(&raw),
             };
-            let tau = time_constant(&m, &f);
+            let tau = settling_time(&m, &f);
             if tau >= block {
                 withheld.push(held(Why::Slow(tau)));
             } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
@@ -581,6 +579,23 @@ fn nominal_orders(nominal: &NominalArx, inputs: usize, longest: usize) -> Orders
         })
         .collect();
     Orders { na, nb, nk, trend: false, reading: None }
+}
+
+/// The time constant (samples) the settling rule reads off a fitted structure: its slowest
+/// pole's ([`Model::slowest_pole`]), +∞ for a pole on or outside the unit circle. For an
+/// element whose stores carry the plant's dynamics ([`Element::carries_dynamics`]) only the
+/// linear part's poles count. The rule guards against a slow linear mode, whose settled level
+/// (`b/(1 − a)`) is ever less determined as its pole nears one; a store's settled level is set
+/// by its own law (a tank's level goes with the square of its inflow) and the levels it starts
+/// from are fitted. Measured on the development tanks before it was kept
+/// (docs/diagnose-history.md, stop 59).
+fn settling_time(m: &Model<'_>, f: &Fitted) -> f64 {
+    let r = if m.element.carries_dynamics() {
+        Model { element: &Linear, input: m.input, orders: m.orders.clone() }.slowest_pole(f)
+    } else {
+        m.slowest_pole(f)
+    };
+    if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() }
 }
 
 /// Free parameters of an element on the linear orders, the drift term included.
@@ -891,6 +906,27 @@ mod tests {
         assert_eq!(f.physics, Physics::Saturation, "{} {:?}", f.summary, f.tried);
         let (k1, k2) = (f.parameters["upper_orifice"], f.parameters["lower_orifice"]);
         assert!((k1 - 0.3).abs() < 0.01 && (k2 - 0.25).abs() < 0.01, "{:?}", f.parameters);
+    }
+
+    /// The settling rule reads a tank cascade by its linear part alone and a single draining
+    /// tank by its store too: both with stores of 400 samples at the mean inflow (`ū` = 2,
+    /// orifices 0.1: `exp(−k²/(2ū))`) behind a linear part with one pole at 0.9 (9.49 samples,
+    /// `−1/ln 0.9`). The cascade settles in the linear part's 9.49, the single tank in its
+    /// store's 400.
+    #[test]
+    fn the_settling_rule_reads_a_cascade_by_its_linear_part_alone() {
+        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
+        // α, β and the constant; only α is read.
+        let theta = vec![0.9, 0.1, 0.0];
+        let tau = |element: &dyn Element, p: Vec<f64>| {
+            let m = Model { element, input: 0, orders: orders.clone() };
+            settling_time(&m, &Fitted { p, theta: theta.clone(), noise: vec![] })
+        };
+        let linear = -1.0 / 0.9f64.ln();
+        let cascade = tau(&super::super::tank_cascade::TankCascade, vec![2.0, 2.0, 0.1, 500.0, 0.1]);
+        assert!((cascade - linear).abs() < 1e-6, "{cascade} against {linear}");
+        let single = tau(&super::super::draining_tank::DrainingTank, vec![2.0, 0.1, 500.0]);
+        assert!((single - 400.0).abs() < 1e-6, "{single}");
     }
 
     /// A known limit of the drift test, pinned down. The plant of the settling test with pole

@@ -120,8 +120,9 @@ pub trait Element: Sync {
     /// it is then also tried behind a static linear part, no poles and one tap per input at the
     /// nominal's dead time, which the linear orders searched for a linear model would not give
     /// it (a linear model follows slow stores with poles and long dead times that an element
-    /// with the stores needs none of; an argument, not a measurement of its own). False by
-    /// default.
+    /// with the stores needs none of; an argument, not a measurement of its own). Its own poles
+    /// are then left out of the settling rule, which reads the linear part's only (see
+    /// `explain`). False by default.
     fn carries_dynamics(&self) -> bool {
         false
     }
