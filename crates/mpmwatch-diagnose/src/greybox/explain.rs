@@ -134,6 +134,11 @@ pub struct Names<'a> {
 /// training rows, `min_gain` the smallest gain in points that counts, `drift_min_gain` the
 /// points of cross-validated FIT a drift term must add to the re-fitted linear model for every
 /// structure to carry one ([`drift_gain`]; open loop only, +∞ never), `ts` the sample time.
+///
+/// In four steps: the reference every hypothesis is scored against (`Reference::of`), every
+/// element scored on every linear order set (`candidates`), then the first of three
+/// corrections that is reported (a named element, a linear change, the instrument's range
+/// alone; `Judge`), and otherwise `unexplained`.
 #[allow(clippy::too_many_arguments)]
 pub fn explain(
     d: &Data<'_>,
@@ -147,76 +152,171 @@ pub fn explain(
     ts: f64,
     names: &Names<'_>,
 ) -> Explanation {
-    let longest = max_dead_time(folds);
-    // A range the output's instrument reads within, when the training rows show one (see the
-    // module's doc).
-    let reading = pinned(&d.y[d.train.clone()]);
-    // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
-    // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders are
-    // the user's knowledge of the plant). The linear model competes at both.
-    let mut linear =
-        linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, Beside::Nothing, None), false);
-    // Read through the range, as every structure is scored, before it decides the drift.
-    let read = |l: Option<(Orders, CvScore)>, folds: &[(Vec<usize>, std::ops::Range<usize>)]| {
-        l.and_then(|(o, _)| {
-            let o = Orders { reading, ..o };
-            cv_fit(&Model { element: &Linear, input: 0, orders: o.clone() }, d, folds).map(|v| (o, v))
-        })
+    let els = elements();
+    let mut reference = Reference::of(d, s, nominal, folds, drift_min_gain);
+    let (order_sets, scored) = candidates(d, &mut reference, &els, flagged);
+    let block = reference.folds.iter().map(|f| f.1.len()).min().unwrap_or(0) as f64;
+    let mut judge = Judge {
+        d,
+        s,
+        nominal,
+        flagged,
+        names,
+        ts,
+        min_gain,
+        els: &els,
+        tried: tried(&scored, &els, &reference.nominal_cv),
+        train_rows: (d.train.start + warmup..d.train.end).collect(),
+        block,
+        withheld: Vec::new(),
+        reference: &reference,
     };
-    if reading.is_some() {
-        linear = read(linear, folds);
+    if let Some(e) = judge.element(&scored, &order_sets) {
+        return e;
     }
-    // An output that drifts in a way no input carries: every structure and the nominal's
-    // reference then carry the same nuisance, so that what a hypothesis is credited with is
-    // what it explains beside it.
-    let with_drift = match &linear {
-        Some(l) if d.noise_order == 0 && drift_min_gain.is_finite() => drift_gain(d, folds, l),
-        _ => None,
-    };
-    let drift = with_drift.is_some_and(|g| g >= drift_min_gain)
-        && linear.as_ref().is_some_and(|l| drift_is_one_line(d, folds, &l.0));
-    let beside = if drift { Beside::Drift } else { Beside::Nothing };
-    if drift {
-        linear = linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside, None), true);
+    if let Some(e) = judge.linear_refit() {
+        return e;
     }
-    let from_nominal = Orders { trend: drift, reading, ..nominal_orders(nominal, d.u.len(), longest) };
-    // A simulation copies the record up to its longest dead time and taps, so those rows have no
-    // error; every block is scored after them, or a long dead time would be credited with them
-    // against the nominal.
-    let reach = linear.iter().map(|l| &l.0).chain([&from_nominal]).map(|o| o.reach()).max().unwrap_or(0);
-    let trimmed;
-    let trim = folds.first().is_some_and(|f| f.1.start < reach);
-    let folds = if trim {
-        trimmed = starting_at(folds, reach);
-        &trimmed[..]
-    } else {
-        folds
-    };
-    // The orders were searched on the record as it is; the linear re-fit is scored as every
-    // structure is, after the rows a simulation copies and read through the range.
-    if trim || reading.is_some() {
-        linear = read(linear, folds);
+    if let Some(e) = judge.range_alone() {
+        return e;
     }
-    let nominal_cv = nominal_cv_fit(s, d.y, folds, d.noise_order, beside, reading);
-    // Candidates are ranked in the currency their fits were made in (see `CvScore::rank`); the
-    // gate is always the plain FIT's.
-    let rank = |v: &CvScore| v.rank(&nominal_cv, d.noise_order);
-    let mut order_sets: Vec<Orders> = linear.iter().map(|l| l.0.clone()).collect();
-    if !order_sets.contains(&from_nominal) {
-        let m = Model { element: &Linear, input: 0, orders: from_nominal.clone() };
-        if let Some(v) = cv_fit(&m, d, folds) {
-            if linear.as_ref().is_none_or(|l| rank(&v) > rank(&l.1)) {
-                linear = Some((from_nominal.clone(), v));
-            }
-            order_sets.push(from_nominal.clone());
+    judge.unexplained(&scored)
+}
+
+/// What every hypothesis of one output is scored against: the best re-fitted linear
+/// structure, the nominal's score, and the nuisances every structure carries (a drift, an
+/// instrument's range; see the module's doc).
+struct Reference {
+    /// The longest dead time the linear search offers.
+    longest: usize,
+    /// A range the output's instrument reads within, when the training rows show one.
+    reading: Option<super::Reading>,
+    /// What a drift term adds to the re-fitted linear model, when it was tried.
+    drift_gain: Option<f64>,
+    /// Whether every structure carries a drift term.
+    drift: bool,
+    /// The nominal's own linear orders.
+    from_nominal: Orders,
+    /// The blocked folds, every validation block after the rows a simulation copies.
+    folds: Vec<(Vec<usize>, std::ops::Range<usize>)>,
+    /// The best re-fitted linear structure and its score.
+    linear: Option<(Orders, CvScore)>,
+    /// The nominal's score, read as every structure is.
+    nominal_cv: CvScore,
+    /// With a range, the nominal's score not read through it (the range alone's reference).
+    raw: Option<CvScore>,
+    /// The record's noise order (0: open loop), which sets the ranking currency.
+    noise_order: usize,
+}
+
+impl Reference {
+    fn of(
+        d: &Data<'_>,
+        s: &[f64],
+        nominal: &NominalArx,
+        folds: &[(Vec<usize>, std::ops::Range<usize>)],
+        drift_min_gain: f64,
+    ) -> Reference {
+        let longest = max_dead_time(folds);
+        let reading = pinned(&d.y[d.train.clone()]);
+        // The linear dynamics every hypothesis starts from: the best re-fitted orders, and the
+        // nominal's own (a nonlinearity can bias the linear search, and the nominal's orders
+        // are the user's knowledge of the plant). The linear model competes at both.
+        let mut linear = linear_orders(
+            d,
+            folds,
+            &nominal_cv_fit(s, d.y, folds, d.noise_order, Beside::Nothing, None),
+            false,
+        );
+        // Read through the range, as every structure is scored, before it decides the drift.
+        let read = |l: Option<(Orders, CvScore)>, folds: &[(Vec<usize>, std::ops::Range<usize>)]| {
+            l.and_then(|(o, _)| {
+                let o = Orders { reading, ..o };
+                cv_fit(&Model { element: &Linear, input: 0, orders: o.clone() }, d, folds).map(|v| (o, v))
+            })
+        };
+        if reading.is_some() {
+            linear = read(linear, folds);
+        }
+        // An output that drifts in a way no input carries: every structure and the nominal's
+        // reference then carry the same nuisance, so that what a hypothesis is credited with
+        // is what it explains beside it.
+        let drift_gain = match &linear {
+            Some(l) if d.noise_order == 0 && drift_min_gain.is_finite() => drift_gain(d, folds, l),
+            _ => None,
+        };
+        let drift = drift_gain.is_some_and(|g| g >= drift_min_gain)
+            && linear.as_ref().is_some_and(|l| drift_is_one_line(d, folds, &l.0));
+        let beside = if drift { Beside::Drift } else { Beside::Nothing };
+        if drift {
+            linear =
+                linear_orders(d, folds, &nominal_cv_fit(s, d.y, folds, d.noise_order, beside, None), true);
+        }
+        let from_nominal = Orders { trend: drift, reading, ..nominal_orders(nominal, d.u.len(), longest) };
+        // A simulation copies the record up to its longest dead time and taps, so those rows
+        // have no error; every block is scored after them, or a long dead time would be
+        // credited with them against the nominal.
+        let reach = linear.iter().map(|l| &l.0).chain([&from_nominal]).map(|o| o.reach()).max().unwrap_or(0);
+        let trim = folds.first().is_some_and(|f| f.1.start < reach);
+        let folds = if trim { starting_at(folds, reach) } else { folds.to_vec() };
+        // The orders were searched on the record as it is; the linear re-fit is scored as every
+        // structure is, after the rows a simulation copies and read through the range.
+        if trim || reading.is_some() {
+            linear = read(linear, &folds);
+        }
+        let nominal_cv = nominal_cv_fit(s, d.y, &folds, d.noise_order, beside, reading);
+        let raw = reading.map(|_| nominal_cv_fit(s, d.y, &folds, d.noise_order, beside, None));
+        Reference {
+            longest,
+            reading,
+            drift_gain,
+            drift,
+            from_nominal,
+            folds,
+            linear,
+            nominal_cv,
+            raw,
+            noise_order: d.noise_order,
         }
     }
-    let mut tried: Vec<Tried> = Vec::new();
+
+    /// A candidate's score in the currency its fit was made in (see [`CvScore::rank`]); the
+    /// gate is always the plain FIT's.
+    fn rank(&self, v: &CvScore) -> f64 {
+        v.rank(&self.nominal_cv, self.noise_order)
+    }
+
+    /// With a range, what the range alone adds: the nominal read through it, against the
+    /// nominal as it is (−∞ without one). It and what a linear change adds beside it are two
+    /// parts of one correction, and the larger names it.
+    fn range_part(&self) -> f64 {
+        self.raw.as_ref().map_or(f64::NEG_INFINITY, |r| self.nominal_cv.mean - r.mean)
+    }
+}
+
+/// Every element on every linear order set it is tried on, scored by blocked
+/// cross-validation: the order sets (the re-fit's, the nominal's when they differ, and last
+/// the static part, tried only behind elements that carry the dynamics) and the scores. The
+/// nominal's orders replace the re-fit's as the linear competitor when they rank higher.
+fn candidates(
+    d: &Data<'_>,
+    r: &mut Reference,
+    els: &[Box<dyn Element>],
+    flagged: &[usize],
+) -> (Vec<Orders>, Vec<Scored>) {
+    let mut order_sets: Vec<Orders> = r.linear.iter().map(|l| l.0.clone()).collect();
+    if !order_sets.contains(&r.from_nominal) {
+        let m = Model { element: &Linear, input: 0, orders: r.from_nominal.clone() };
+        if let Some(v) = cv_fit(&m, d, &r.folds) {
+            if r.linear.as_ref().is_none_or(|l| r.rank(&v) > r.rank(&l.1)) {
+                r.linear = Some((r.from_nominal.clone(), v));
+            }
+            order_sets.push(r.from_nominal.clone());
+        }
+    }
     let mut scored: Vec<Scored> = Vec::new();
-    let els = elements();
-    // Last, the static linear part, tried only behind elements that carry the dynamics.
     let static_part = order_sets.len();
-    order_sets.push(Orders { na: 0, nb: 1, ..from_nominal.clone() });
+    order_sets.push(Orders { na: 0, nb: 1, ..r.from_nominal.clone() });
     for (o, orders) in order_sets.iter().enumerate() {
         for (k, el) in els.iter().enumerate().filter(|(_, el)| o < static_part || el.carries_dynamics()) {
             let inputs: Vec<usize> = match el.acts_on() {
@@ -225,13 +325,19 @@ pub fn explain(
             };
             for &i in inputs.iter().filter(|&&i| el.identifiable(d, i)) {
                 let m = Model { element: el.as_ref(), input: i, orders: orders.clone() };
-                let Some(v) = cv_fit(&m, d, folds) else { continue };
+                let Some(v) = cv_fit(&m, d, &r.folds) else { continue };
                 scored.push((v, k, i, complexity(el.as_ref(), d, i, orders), o));
             }
         }
     }
-    let linear_cv = linear.as_ref().map_or(f64::NEG_INFINITY, |l| rank(&l.1));
-    for (v, k, _, _, _) in &scored {
+    (order_sets, scored)
+}
+
+/// Each physics class tried, with the best mean gain over the nominal any of its candidates
+/// reached.
+fn tried(scored: &[Scored], els: &[Box<dyn Element>], nominal_cv: &CvScore) -> Vec<Tried> {
+    let mut tried: Vec<Tried> = Vec::new();
+    for (v, k, _, _, _) in scored {
         let (gain, ph) = (v.mean - nominal_cv.mean, els[*k].physics());
         match tried.iter_mut().find(|t| t.physics == ph) {
             Some(t) if t.validation_gain_pct >= gain => {}
@@ -239,204 +345,268 @@ pub fn explain(
             None => tried.push(Tried { physics: ph, score_vs_null: None, validation_gain_pct: gain }),
         }
     }
-    // The honesty gate, as on the closed-loop path: the correction must raise the mean block FIT
-    // by `min_gain` points and lower no block.
-    let passes = |v: &CvScore| v.mean - nominal_cv.mean >= min_gain && v.min_gain_over(&nominal_cv) >= 0.0;
-    let train_rows: Vec<usize> = (d.train.start + warmup..d.train.end).collect();
-    let block = folds.iter().map(|f| f.1.len()).min().unwrap_or(0) as f64;
-    // Each correction that passed the gate and was not reported, in the order tried.
-    let mut withheld: Vec<Withheld> = Vec::new();
-    let held = |physics: Physics, why: Why, v: &CvScore| Withheld {
-        physics,
-        why,
-        mean: v.mean - nominal_cv.mean,
-        worst: v.min_gain_over(&nominal_cv),
-    };
-    if let Some((v, k, i, _, o)) = chosen(&scored, &rank)
-        && rank(v) - linear_cv >= NONLINEAR_MARGIN
-        && passes(v)
-    {
-        let (k, i, o) = (*k, *i, *o);
-        let el = els[k].as_ref();
-        let m = Model { element: el, input: i, orders: order_sets[o].clone() };
-        if let Some(f) = fit(&m, d, &train_rows) {
-            let tau = settling_time(&m, &f);
-            let settles = tau < block;
-            if !settles {
-                withheld.push(held(el.physics(), Why::Slow(tau), v));
-            } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
-                let share = m.acting_share(&f, &d.u, &sim, &train_rows);
-                match share.filter(|&s| s.is_nan() || s < MIN_ACTING) {
-                    Some(share) => withheld.push(held(el.physics(), Why::Idle(share), v)),
-                    None => {
-                        let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
-                        summary += &drift_note(&m, &f, d, names.output);
-                        summary += &reading_note(reading, names.output);
-                        return Explanation {
-                            finding: finding(
-                                names,
-                                i,
-                                el.physics(),
-                                el.acts_on(),
-                                summary,
-                                parameters,
-                                tried,
-                            ),
-                            corrected: Some(sim),
-                            curve: m.curve(&f, d, names.inputs[i], names.output),
-                            withheld: false,
-                        };
-                    }
-                }
-            }
-        }
+    tried
+}
+
+/// The decision for one output, against its [`Reference`]: each correction in turn, the first
+/// that passes every test reported, each that passed the gate and was not reported kept with
+/// its reason for the `unexplained` finding.
+struct Judge<'a> {
+    d: &'a Data<'a>,
+    /// The nominal simulation.
+    s: &'a [f64],
+    nominal: &'a NominalArx,
+    flagged: &'a [usize],
+    names: &'a Names<'a>,
+    ts: f64,
+    min_gain: f64,
+    els: &'a [Box<dyn Element>],
+    reference: &'a Reference,
+    /// Each class tried and its best gain, for the finding.
+    tried: Vec<Tried>,
+    /// The training rows a correction is fitted on.
+    train_rows: Vec<usize>,
+    /// The shortest validation block, samples.
+    block: f64,
+    /// Each correction that passed the gate and was not reported, in the order tried.
+    withheld: Vec<Withheld>,
+}
+
+impl Judge<'_> {
+    /// The honesty gate, as on the closed-loop path: the correction must raise the mean block
+    /// FIT by `min_gain` points and lower no block.
+    fn passes(&self, v: &CvScore) -> bool {
+        let n = &self.reference.nominal_cv;
+        v.mean - n.mean >= self.min_gain && v.min_gain_over(n) >= 0.0
     }
-    // With a range, what the range alone adds (the nominal read through it against the nominal
-    // as it is) and what the linear change adds beside it are two parts of one correction: the
-    // larger names it (the range, below).
-    let raw = reading.map(|_| nominal_cv_fit(s, d.y, folds, d.noise_order, beside, None));
-    let range_part = raw.as_ref().map_or(f64::NEG_INFINITY, |r| nominal_cv.mean - r.mean);
-    if let Some((orders, v)) = &linear
-        && passes(v)
-        && v.mean - nominal_cv.mean >= range_part
-    {
+
+    fn held(&self, physics: Physics, why: Why, v: &CvScore) -> Withheld {
+        let n = &self.reference.nominal_cv;
+        Withheld { physics, why, mean: v.mean - n.mean, worst: v.min_gain_over(n) }
+    }
+
+    /// The corrected simulation of a fitted structure over the whole record, when it settles
+    /// within a validation block: `Err(Some(why))` when it does not, `Err(None)` when it
+    /// cannot be simulated.
+    fn settled(&self, m: &Model<'_>, f: &Fitted) -> Result<Vec<f64>, Option<Why>> {
+        let tau = settling_time(m, f);
+        let settles = tau < self.block;
+        if !settles {
+            return Err(Some(Why::Slow(tau)));
+        }
+        m.simulate_held(f, &self.d.u, self.d.y, self.d.train.end.saturating_sub(1)).ok_or(None)
+    }
+
+    /// The chosen physics element ([`chosen`]), when it beats the linear re-fit by
+    /// [`NONLINEAR_MARGIN`], passes the gate, settles and acts.
+    fn element(&mut self, scored: &[Scored], order_sets: &[Orders]) -> Option<Explanation> {
+        let r = self.reference;
+        let linear_cv = r.linear.as_ref().map_or(f64::NEG_INFINITY, |l| r.rank(&l.1));
+        let (v, k, i, _, o) = chosen(scored, &|v: &CvScore| r.rank(v))?;
+        let beats = r.rank(v) - linear_cv >= NONLINEAR_MARGIN && self.passes(v);
+        if !beats {
+            return None;
+        }
+        let (d, i, names) = (self.d, *i, self.names);
+        let el = self.els[*k].as_ref();
+        let m = Model { element: el, input: i, orders: order_sets[*o].clone() };
+        let f = fit(&m, d, &self.train_rows)?;
+        let sim = match self.settled(&m, &f) {
+            Ok(sim) => sim,
+            Err(why) => {
+                if let Some(why) = why {
+                    self.withheld.push(self.held(el.physics(), why, v));
+                }
+                return None;
+            }
+        };
+        let share = m.acting_share(&f, &d.u, &sim, &self.train_rows);
+        if let Some(share) = share.filter(|&s| s.is_nan() || s < MIN_ACTING) {
+            self.withheld.push(self.held(el.physics(), Why::Idle(share), v));
+            return None;
+        }
+        let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+        summary += &drift_note(&m, &f, d, names.output);
+        summary += &reading_note(r.reading, names.output);
+        let tried = std::mem::take(&mut self.tried);
+        Some(Explanation {
+            finding: finding(names, i, el.physics(), el.acts_on(), summary, parameters, tried),
+            corrected: Some(sim),
+            curve: m.curve(&f, d, names.inputs[i], names.output),
+            withheld: false,
+        })
+    }
+
+    /// The re-fitted linear model as a linear change (a gain, a time constant, a dead time, a
+    /// missing coupling), when it passes the gate, adds more than the range alone would and
+    /// settles.
+    fn linear_refit(&mut self) -> Option<Explanation> {
+        let r = self.reference;
+        let (orders, v) = r.linear.as_ref()?;
+        let bigger = self.passes(v) && v.mean - r.nominal_cv.mean >= r.range_part();
+        if !bigger {
+            return None;
+        }
+        let (d, names) = (self.d, self.names);
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
-        if let Some(f) = fit(&m, d, &train_rows) {
-            let tau = settling_time(&m, &f);
-            let settles = tau < block;
-            if !settles {
-                withheld.push(held(Physics::Unexplained, Why::Slow(tau), v));
-            } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
-                let i = flagged.first().copied().unwrap_or(0);
-                let modelled = nominal.has_channel(i, d.u[i], s);
-                let (physics, mut summary, parameters, curve) =
-                    linear_change(nominal, &f, orders, i, modelled, ts, names);
-                summary += &at_the_bound(physics, orders, i, longest);
-                summary += &drift_note(&m, &f, d, names.output);
-                summary += &reading_note(reading, names.output);
-                tried.push(Tried {
-                    physics,
-                    score_vs_null: None,
-                    validation_gain_pct: v.mean - nominal_cv.mean,
-                });
-                return Explanation {
-                    finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
-                    corrected: Some(sim),
-                    curve: Some(curve),
-                    withheld: false,
-                };
-            }
-        }
-    }
-    // The range alone: the linear re-fit read through it, against the nominal as it is.
-    if let (Some(r), Some(raw), Some((orders, lv))) = (reading, raw, &linear)
-        && range_part > lv.mean - nominal_cv.mean
-    {
-        let el = ClipSensor { range: Some(r) };
-        let m = Model { element: &el, input: 0, orders: orders.clone() };
-        if let Some(v) = cv_fit(&m, d, folds)
-            && v.mean - raw.mean >= min_gain
-            && v.min_gain_over(&raw) >= 0.0
-            && let Some(f) = fit(&m, d, &train_rows)
-        {
-            let held = |why: Why| Withheld {
-                physics: Physics::Saturation,
-                why,
-                mean: v.mean - raw.mean,
-                worst: v.min_gain_over(&raw),
-            };
-            let tau = settling_time(&m, &f);
-            if tau >= block {
-                withheld.push(held(Why::Slow(tau)));
-            } else if let Some(sim) = m.simulate_held(&f, &d.u, d.y, d.train.end.saturating_sub(1)) {
-                let share = m.acting_share(&f, &d.u, &sim, &train_rows).unwrap_or(0.0);
-                if share.is_nan() || share < MIN_ACTING {
-                    withheld.push(held(Why::Idle(share)));
-                } else {
-                    let i = flagged.first().copied().unwrap_or(0);
-                    let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
-                    summary += &drift_note(&m, &f, d, names.output);
-                    // Its gain is against the nominal as it is, the currency of its gate.
-                    let gain = v.mean - raw.mean;
-                    match tried.iter_mut().find(|t| t.physics == Physics::Saturation) {
-                        Some(t) => t.validation_gain_pct = t.validation_gain_pct.max(gain),
-                        None => tried.push(Tried {
-                            physics: Physics::Saturation,
-                            score_vs_null: None,
-                            validation_gain_pct: gain,
-                        }),
-                    }
-                    return Explanation {
-                        finding: finding(
-                            names,
-                            i,
-                            Physics::Saturation,
-                            ActsOn::Output,
-                            summary,
-                            parameters,
-                            tried,
-                        ),
-                        corrected: Some(sim),
-                        // Nothing of the clip is fitted: its limits are the record's.
-                        curve: m.curve(&f, d, names.inputs[i], names.output).map(|mut c| {
-                            c.label = "the range read off the record".into();
-                            c
-                        }),
-                        withheld: false,
-                    };
+        let f = fit(&m, d, &self.train_rows)?;
+        let sim = match self.settled(&m, &f) {
+            Ok(sim) => sim,
+            Err(why) => {
+                if let Some(why) = why {
+                    self.withheld.push(self.held(Physics::Unexplained, why, v));
                 }
+                return None;
             }
-        }
+        };
+        let i = self.flagged.first().copied().unwrap_or(0);
+        let modelled = self.nominal.has_channel(i, d.u[i], self.s);
+        let (physics, mut summary, parameters, curve) =
+            linear_change(self.nominal, &f, orders, i, modelled, self.ts, names);
+        summary += &at_the_bound(physics, orders, i, r.longest);
+        summary += &drift_note(&m, &f, d, names.output);
+        summary += &reading_note(r.reading, names.output);
+        let mut tried = std::mem::take(&mut self.tried);
+        tried.push(Tried { physics, score_vs_null: None, validation_gain_pct: v.mean - r.nominal_cv.mean });
+        Some(Explanation {
+            finding: finding(names, i, physics, ActsOn::Input, summary, parameters, tried),
+            corrected: Some(sim),
+            curve: Some(curve),
+            withheld: false,
+        })
     }
-    let top = scored.iter().max_by(|a, b| rank(&a.0).total_cmp(&rank(&b.0)));
-    let summary = match (withheld.split_first(), top, &linear) {
-        (Some((first, next)), ..) => {
-            let mut text = format!(
-                "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {:+.1} points on average ({:+.1} on its worst block), but {}, so it is not reported{}",
-                names.output,
-                first.name(),
-                first.mean,
-                first.worst,
-                first.why.text(block),
-                first.why.advice(block, d.y.len()),
-            );
-            for w in next {
-                text += &format!(
-                    "; the next, {} ({:+.1} points), is not reported either: {}{}",
-                    w.name(),
-                    w.mean,
-                    w.why.text(block),
-                    w.why.advice(block, d.y.len())
-                );
-            }
-            if matches!(first.why, Why::Idle(_)) && !next.iter().any(|w| w.physics == Physics::Unexplained) {
-                text += "; no re-fitted linear model is reported in its place";
-            }
-            text
+
+    /// The instrument's range alone, a clip on the output: the linear re-fit read through it,
+    /// against the nominal as it is, when the range adds more than the linear change beside it.
+    fn range_alone(&mut self) -> Option<Explanation> {
+        let r = self.reference;
+        let (Some(range), Some(raw), Some((orders, lv))) = (r.reading, r.raw.as_ref(), r.linear.as_ref())
+        else {
+            return None;
+        };
+        let bigger = r.range_part() > lv.mean - r.nominal_cv.mean;
+        if !bigger {
+            return None;
         }
-        (None, Some((v, k, ..)), Some((_, lv))) => format!(
-            "{}'s simulation misses something, but nothing tried improves it out of sample by {min_gain} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
-            names.output,
-            els[*k].physics().name(),
-            v.mean - nominal_cv.mean,
-            v.min_gain_over(&nominal_cv),
-            lv.mean - nominal_cv.mean,
-            lv.min_gain_over(&nominal_cv),
-        ),
-        _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
-    } + &match with_drift.filter(|_| drift) {
-        Some(g) => format!(
-            "; every structure tried carried a drift term, a straight line in time that no input explains (with one, the re-fitted linear model gains {g:+.1} points)"
-        ),
-        None => String::new(),
-    } + &reading_note(reading, names.output);
-    let i = flagged.first().copied().unwrap_or(0);
-    let withheld = !withheld.is_empty();
-    Explanation {
-        finding: finding(names, i, Physics::Unexplained, ActsOn::Input, summary, BTreeMap::new(), tried),
-        corrected: None,
-        curve: None,
-        withheld,
+        let (d, names) = (self.d, self.names);
+        let el = ClipSensor { range: Some(range) };
+        let m = Model { element: &el, input: 0, orders: orders.clone() };
+        let v = cv_fit(&m, d, &r.folds)?;
+        let gated = v.mean - raw.mean >= self.min_gain && v.min_gain_over(raw) >= 0.0;
+        if !gated {
+            return None;
+        }
+        let f = fit(&m, d, &self.train_rows)?;
+        let held = |why: Why| Withheld {
+            physics: Physics::Saturation,
+            why,
+            mean: v.mean - raw.mean,
+            worst: v.min_gain_over(raw),
+        };
+        let sim = match self.settled(&m, &f) {
+            Ok(sim) => sim,
+            Err(why) => {
+                if let Some(why) = why {
+                    self.withheld.push(held(why));
+                }
+                return None;
+            }
+        };
+        let share = m.acting_share(&f, &d.u, &sim, &self.train_rows).unwrap_or(0.0);
+        if share.is_nan() || share < MIN_ACTING {
+            self.withheld.push(held(Why::Idle(share)));
+            return None;
+        }
+        let i = self.flagged.first().copied().unwrap_or(0);
+        let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+        summary += &drift_note(&m, &f, d, names.output);
+        // Its gain is against the nominal as it is, the currency of its gate.
+        let gain = v.mean - raw.mean;
+        let mut tried = std::mem::take(&mut self.tried);
+        match tried.iter_mut().find(|t| t.physics == Physics::Saturation) {
+            Some(t) => t.validation_gain_pct = t.validation_gain_pct.max(gain),
+            None => tried.push(Tried {
+                physics: Physics::Saturation,
+                score_vs_null: None,
+                validation_gain_pct: gain,
+            }),
+        }
+        Some(Explanation {
+            finding: finding(names, i, Physics::Saturation, ActsOn::Output, summary, parameters, tried),
+            corrected: Some(sim),
+            // Nothing of the clip is fitted: its limits are the record's.
+            curve: m.curve(&f, d, names.inputs[i], names.output).map(|mut c| {
+                c.label = "the range read off the record".into();
+                c
+            }),
+            withheld: false,
+        })
+    }
+
+    /// Nothing reported: the finding is `unexplained` and says why, each withheld correction in
+    /// the order tried, or the best candidate's and the linear re-fit's gains.
+    fn unexplained(self, scored: &[Scored]) -> Explanation {
+        let (r, names, block) = (self.reference, self.names, self.block);
+        let top = scored.iter().max_by(|a, b| r.rank(&a.0).total_cmp(&r.rank(&b.0)));
+        let summary = match (self.withheld.split_first(), top, &r.linear) {
+            (Some((first, next)), ..) => {
+                let mut text = format!(
+                    "{}'s simulation misses something, and the best correction, {}, raises the cross-validated FIT by {:+.1} points on average ({:+.1} on its worst block), but {}, so it is not reported{}",
+                    names.output,
+                    first.name(),
+                    first.mean,
+                    first.worst,
+                    first.why.text(block),
+                    first.why.advice(block, self.d.y.len()),
+                );
+                for w in next {
+                    text += &format!(
+                        "; the next, {} ({:+.1} points), is not reported either: {}{}",
+                        w.name(),
+                        w.mean,
+                        w.why.text(block),
+                        w.why.advice(block, self.d.y.len())
+                    );
+                }
+                if matches!(first.why, Why::Idle(_))
+                    && !next.iter().any(|w| w.physics == Physics::Unexplained)
+                {
+                    text += "; no re-fitted linear model is reported in its place";
+                }
+                text
+            }
+            (None, Some((v, k, ..)), Some((_, lv))) => format!(
+                "{}'s simulation misses something, but nothing tried improves it out of sample by {} points on average without lowering a validation block: the best candidate, {}, changes the cross-validated FIT by {:+.1} points on average and {:+.1} on its worst block, the re-fitted linear model by {:+.1} and {:+.1}",
+                names.output,
+                self.min_gain,
+                self.els[*k].physics().name(),
+                v.mean - r.nominal_cv.mean,
+                v.min_gain_over(&r.nominal_cv),
+                lv.mean - r.nominal_cv.mean,
+                lv.min_gain_over(&r.nominal_cv),
+            ),
+            _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
+        } + &match r.drift_gain.filter(|_| r.drift) {
+            Some(g) => format!(
+                "; every structure tried carried a drift term, a straight line in time that no input explains (with one, the re-fitted linear model gains {g:+.1} points)"
+            ),
+            None => String::new(),
+        } + &reading_note(r.reading, names.output);
+        let i = self.flagged.first().copied().unwrap_or(0);
+        Explanation {
+            finding: finding(
+                names,
+                i,
+                Physics::Unexplained,
+                ActsOn::Input,
+                summary,
+                BTreeMap::new(),
+                self.tried,
+            ),
+            corrected: None,
+            curve: None,
+            withheld: !self.withheld.is_empty(),
+        }
     }
 }
 
