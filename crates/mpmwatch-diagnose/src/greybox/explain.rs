@@ -136,9 +136,10 @@ pub struct Names<'a> {
 /// structure to carry one ([`drift_gain`]; open loop only, +∞ never), `ts` the sample time.
 ///
 /// In four steps: the reference every hypothesis is scored against (`Reference::of`), every
-/// element scored on every linear order set (`candidates`), then the first of three
-/// corrections that is reported (a named element, a linear change, the instrument's range
-/// alone; `Judge`), and otherwise `unexplained`.
+/// element scored on every linear order set (`candidates`, which also settles the linear
+/// competitor: the re-fit's orders or the nominal's), then the first of three corrections that
+/// is reported (a named element, a linear change, the instrument's range alone; `Judge`), and
+/// otherwise `unexplained`.
 #[allow(clippy::too_many_arguments)]
 pub fn explain(
     d: &Data<'_>,
@@ -192,20 +193,22 @@ struct Reference {
     /// A range the output's instrument reads within, when the training rows show one.
     reading: Option<super::Reading>,
     /// What a drift term adds to the re-fitted linear model, when it was tried.
-    drift_gain: Option<f64>,
+    with_drift: Option<f64>,
     /// Whether every structure carries a drift term.
     drift: bool,
     /// The nominal's own linear orders.
     from_nominal: Orders,
     /// The blocked folds, every validation block after the rows a simulation copies.
     folds: Vec<(Vec<usize>, std::ops::Range<usize>)>,
-    /// The best re-fitted linear structure and its score.
+    /// The best linear structure and its score: the re-fit's orders, or the nominal's when
+    /// [`candidates`] finds they rank higher.
     linear: Option<(Orders, CvScore)>,
     /// The nominal's score, read as every structure is.
     nominal_cv: CvScore,
     /// With a range, the nominal's score not read through it (the range alone's reference).
     raw: Option<CvScore>,
-    /// The record's noise order (0: open loop), which sets the ranking currency.
+    /// The record's noise order (0: fitted by simulation error, as in open loop), which sets
+    /// the ranking currency.
     noise_order: usize,
 }
 
@@ -241,11 +244,11 @@ impl Reference {
         // An output that drifts in a way no input carries: every structure and the nominal's
         // reference then carry the same nuisance, so that what a hypothesis is credited with
         // is what it explains beside it.
-        let drift_gain = match &linear {
+        let with_drift = match &linear {
             Some(l) if d.noise_order == 0 && drift_min_gain.is_finite() => drift_gain(d, folds, l),
             _ => None,
         };
-        let drift = drift_gain.is_some_and(|g| g >= drift_min_gain)
+        let drift = with_drift.is_some_and(|g| g >= drift_min_gain)
             && linear.as_ref().is_some_and(|l| drift_is_one_line(d, folds, &l.0));
         let beside = if drift { Beside::Drift } else { Beside::Nothing };
         if drift {
@@ -269,7 +272,7 @@ impl Reference {
         Reference {
             longest,
             reading,
-            drift_gain,
+            with_drift,
             drift,
             from_nominal,
             folds,
@@ -443,8 +446,9 @@ impl Judge<'_> {
     fn linear_refit(&mut self) -> Option<Explanation> {
         let r = self.reference;
         let (orders, v) = r.linear.as_ref()?;
-        let bigger = self.passes(v) && v.mean - r.nominal_cv.mean >= r.range_part();
-        if !bigger {
+        let gated = self.passes(v);
+        let bigger = v.mean - r.nominal_cv.mean >= r.range_part();
+        if !gated || !bigger {
             return None;
         }
         let (d, names) = (self.d, self.names);
@@ -497,7 +501,8 @@ impl Judge<'_> {
             return None;
         }
         let f = fit(&m, d, &self.train_rows)?;
-        let held = |why: Why| Withheld {
+        // Against the nominal as it is (`raw`), the currency of this correction's gate.
+        let held_vs_raw = |why: Why| Withheld {
             physics: Physics::Saturation,
             why,
             mean: v.mean - raw.mean,
@@ -507,14 +512,14 @@ impl Judge<'_> {
             Ok(sim) => sim,
             Err(why) => {
                 if let Some(why) = why {
-                    self.withheld.push(held(why));
+                    self.withheld.push(held_vs_raw(why));
                 }
                 return None;
             }
         };
         let share = m.acting_share(&f, &d.u, &sim, &self.train_rows).unwrap_or(0.0);
         if share.is_nan() || share < MIN_ACTING {
-            self.withheld.push(held(Why::Idle(share)));
+            self.withheld.push(held_vs_raw(Why::Idle(share)));
             return None;
         }
         let i = self.flagged.first().copied().unwrap_or(0);
@@ -586,7 +591,7 @@ impl Judge<'_> {
                 lv.min_gain_over(&r.nominal_cv),
             ),
             _ => format!("{}'s simulation misses something, but no candidate could be fitted", names.output),
-        } + &match r.drift_gain.filter(|_| r.drift) {
+        } + &match r.with_drift.filter(|_| r.drift) {
             Some(g) => format!(
                 "; every structure tried carried a drift term, a straight line in time that no input explains (with one, the re-fitted linear model gains {g:+.1} points)"
             ),
