@@ -36,6 +36,7 @@ mod draining_tank;
 mod explain;
 mod friction;
 mod linear;
+mod linear_change;
 mod noise;
 mod polynomial;
 mod reading;
