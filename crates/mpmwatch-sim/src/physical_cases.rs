@@ -433,16 +433,29 @@ pub fn nominal_simulation(u: &[f64], y: &[f64]) -> Result<Vec<f64>, SimError> {
 pub fn nominal_simulation_of(
     u: &[f64],
     y: &[f64],
+    orders: (usize, usize, usize),
+) -> Result<Vec<f64>, SimError> {
+    nominal_simulation_on(u, y, orders, u)
+}
+
+/// [`nominal_simulation_of`] fitted on one record (`u_fit`, `y_fit`) and simulated on another
+/// input `u`, from rest at its first sample: a nominal identified on an earlier experiment (a
+/// commissioning record) and run over a later one, as a user runs a model over a new record. An
+/// ARX without a steady state (an integrator) starts at the fit record's first output.
+pub fn nominal_simulation_on(
+    u_fit: &[f64],
+    y_fit: &[f64],
     (na, nb, nk): (usize, usize, usize),
+    u: &[f64],
 ) -> Result<Vec<f64>, SimError> {
     let orders = ArxOrders { na, nb, delays: vec![nk] };
-    let arx = Arx::fit(y, &[u], &orders, 0..y.len())
-        .ok_or_else(|| SimError::parameter("nominal ARX fit", y.len(), "least squares failed"))?;
+    let arx = Arx::fit(y_fit, &[u_fit], &orders, 0..y_fit.len())
+        .ok_or_else(|| SimError::parameter("nominal ARX fit", y_fit.len(), "least squares failed"))?;
     let y0 = arx.rest_output(&[u[0]]);
     let s = arx
-        .simulate_from(&[u], if y0.is_finite() { y0 } else { y[0] })
+        .simulate_from(&[u], if y0.is_finite() { y0 } else { y_fit[0] })
         .map_err(|e| SimError::parameter("nominal ARX simulation", 0, &e.to_string()))?;
-    if s.iter().any(|v| !v.is_finite() || v.abs() > 1e6 * (1.0 + var(y).sqrt())) {
+    if s.iter().any(|v| !v.is_finite() || v.abs() > 1e6 * (1.0 + var(y_fit).sqrt())) {
         return Err(SimError::parameter("nominal ARX simulation", 0, "the fitted model is unstable"));
     }
     Ok(s)
@@ -468,6 +481,18 @@ mod tests {
         let err = |s: &[f64]| s.iter().zip(&y).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         assert!(err(&nominal_simulation_of(&u, &y, (1, 1, 2)).unwrap()) < 1e-9);
         assert!(err(&nominal_simulation_of(&u, &y, (1, 1, 1)).unwrap()) > 1e-3);
+        // Fitted on the first half and run over the second from rest at its first input: the
+        // same plant, so the same response as the plant started there at rest.
+        let (u2, y2) = (&u[300..], &y[300..]);
+        let s2 = nominal_simulation_on(&u[..300], &y[..300], (1, 1, 2), u2).unwrap();
+        let mut at_rest = vec![u2[0]; 300];
+        for t in 2..300 {
+            at_rest[t] = 0.9 * at_rest[t - 1] + 0.1 * u2[t - 2];
+        }
+        let gap = s2.iter().zip(&at_rest).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(gap < 1e-9, "{gap}");
+        // The plant itself ran on from the first half: its second half differs at the start.
+        assert!((y2[0] - at_rest[0]).abs() > 1e-3 || (y2[1] - at_rest[1]).abs() > 1e-3);
     }
 
     /// Every case runs on a few seeds, its nominal is finite, and the nominal of the linear

@@ -400,7 +400,7 @@ impl Judge<'_> {
         let d = self.d;
         let sim = m.simulate_held(f, &d.u, d.y, d.train.end.saturating_sub(1))?;
         let share = m.acting_share(f, &d.u, &sim, &self.train_rows);
-        if let Some(share) = share.filter(|&s| s.is_nan() || s < MIN_ACTING) {
+        if let Some(share) = share.filter(|&a| a.is_nan() || a < MIN_ACTING) {
             self.withheld.push(held(Why::Idle(share)));
             return None;
         }
@@ -487,12 +487,12 @@ impl Judge<'_> {
             return None;
         }
         let f = fit(&m, d, &self.train_rows)?;
-        // Measured against the nominal as it is (`raw`), the currency of this correction's gate.
+        // Its gains, withheld or reported, are against the nominal as it is (`raw`), the
+        // currency of its gate.
         let sim = self.reportable(&m, &f, Physics::Saturation, &v, raw)?;
         let i = self.flagged.first().copied().unwrap_or(0);
         let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
         summary += &drift_note(&m, &f, d, names.output);
-        // Its gain is against the nominal as it is, the currency of its gate.
         let gain = v.mean - raw.mean;
         let mut tried = std::mem::take(&mut self.tried);
         match tried.iter_mut().find(|t| t.physics == Physics::Saturation) {
@@ -603,12 +603,14 @@ fn reading_note(reading: Option<super::Reading>, output: &str) -> String {
     })
 }
 
-/// A correction that passed the gate against the nominal and was not reported.
+/// A correction that passed the gate and was not reported.
 struct Withheld {
     /// Its class (`Unexplained` for the re-fitted linear model).
     physics: Physics,
     why: Why,
-    /// Its cross-validated FIT gain over the nominal, on average and on its worst block.
+    /// Its cross-validated FIT gain over the score its gate measured it against (the nominal's;
+    /// for the range alone, the nominal's not read through the range), on average and on its
+    /// worst block.
     mean: f64,
     worst: f64,
 }

@@ -1,6 +1,8 @@
 //! What a re-fitted linear model changes against the nominal, for a finding that is a linear
-//! change: a gain, a time constant, a dead time or a missing coupling, read off the two step
-//! responses (the re-fit's and the nominal's own channel), and the two responses drawn.
+//! change: a gain, a time constant or a dead time, read off the two step responses (the
+//! re-fit's and the nominal's own channel), or a missing coupling, the re-fit's response where
+//! the nominal has no channel; the responses drawn, and the note a dead time at the search's
+//! bound carries.
 
 use std::collections::BTreeMap;
 

@@ -29,13 +29,20 @@
 //! eighth, `SIGNAL=multisine|fast`, records every case under another input signal: a
 //! random-phase multisine over the staircase's band, or the staircase held a quarter as long
 //! (`mpmwatch_sim::physical_cases::Signal`); the plant's dynamics are the seed's own, the
-//! nonlinearity's size and the noise other draws from the same ranges.
+//! nonlinearity's size and the noise other draws from the same ranges. A ninth,
+//! `COMMISSION=1`, identifies the user's nominal on a commissioning experiment: every case is
+//! drawn twice as long, the nominal fitted on the first half and run over the second from
+//! rest, and the second half alone is diagnosed. Its draws are not those of the same seed
+//! without it (the input is drawn twice as long, and what is drawn after it takes other
+//! values), and the other shifts act on the whole record first: a `DRIFT` is spread over both
+//! halves, a `PIN` quantile is taken over both, a `DELAY` shortens both.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
 use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose, fit_pct};
 use mpmwatch_sim::physical_cases::{
-    PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_of, run_with,
+    PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_of, nominal_simulation_on,
+    run_with,
 };
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -211,11 +218,7 @@ fn env_number(name: &str) -> Option<f64> {
 /// unchanged without them.
 fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
-    let orders = std::env::var("NOMINAL").ok().map(|v| {
-        let o: Vec<usize> = v.split(',').map(|x| x.trim().parse().expect("NOMINAL=na,nb,nk")).collect();
-        assert_eq!(o.len(), 3, "NOMINAL=na,nb,nk");
-        (o[0], o[1], o[2])
-    });
+    let orders = nominal_orders();
     if let Some(share) = white {
         let m = mean(&r.plant);
         let var = r.plant.iter().map(|v| (v - m).powi(2)).sum::<f64>() / r.plant.len() as f64;
@@ -266,6 +269,36 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
     r
 }
 
+/// `NOMINAL=na,nb,nk`: the orders of the user's nominal ARX, when they are set.
+fn nominal_orders() -> Option<(usize, usize, usize)> {
+    std::env::var("NOMINAL").ok().map(|v| {
+        let o: Vec<usize> = v.split(',').map(|x| x.trim().parse().expect("NOMINAL=na,nb,nk")).collect();
+        assert_eq!(o.len(), 3, "NOMINAL=na,nb,nk");
+        (o[0], o[1], o[2])
+    })
+}
+
+/// Whether `COMMISSION=1` is set: the nominal is identified on a commissioning record.
+fn commission() -> bool {
+    std::env::var("COMMISSION").is_ok_and(|v| v == "1")
+}
+
+/// `r`, a record of at least twice the diagnosed length `n`, split at `n`: the user's nominal
+/// (an ARX of the orders `NOMINAL`, or the generator's) fitted on the first part, a
+/// commissioning experiment on the same plant, and run over the rest from rest at its first
+/// input, as a user runs a model over a new record; the rest is the record diagnosed. The plant
+/// ran on between the two: its state carries over.
+fn commissioned(mut r: PhysicalRecord, n: usize) -> PhysicalRecord {
+    let o = nominal_orders().unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
+    let n = n.min(r.y.len() / 2);
+    r.s = nominal_simulation_on(&r.u[..n], &r.y[..n], o, &r.u[n..]).expect("nominal");
+    r.u.drain(..n);
+    r.y.drain(..n);
+    r.plant.drain(..n);
+    r.description += "; the nominal fitted on a commissioning record before it";
+    r
+}
+
 #[test]
 #[ignore]
 fn study() {
@@ -280,7 +313,11 @@ fn study() {
         }
         let mut case_right = 0;
         for seed in a..b {
-            let r = shifted(run_with(case, n, seed, signal()).unwrap());
+            let r = if commission() {
+                commissioned(shifted(run_with(case, 2 * n, seed, signal()).unwrap()), n)
+            } else {
+                shifted(run_with(case, n, seed, signal()).unwrap())
+            };
             let d = diagnose_record(&r);
             let o = outcome(&d);
             let ok = if sensor().is_some() {
