@@ -122,7 +122,7 @@ enum Verb {
     /// integrator, the finding then says how long a record would give blocks that long). On generated open-loop
     /// cases, 3000 samples name the physics in about 84 % of cases and 1500 in about 75 %
     /// (docs/diagnose-history.md, stop 45). Time grows about in proportion to the record: one
-    /// open-loop output took 16 to 32 s at 3000 samples and 1.5 to 5.5 min at 24 000 on a
+    /// open-loop output took 16 to 32 s at 3000 samples and 1.4 to 5.5 min at 24 000 on a
     /// 2-core machine (docs/diagnose.md, "Time against record length"); cut a much longer
     /// record to a window that holds the slow modes several times over.
     ///
