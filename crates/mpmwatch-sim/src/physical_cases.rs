@@ -435,25 +435,28 @@ pub fn nominal_simulation_of(
     y: &[f64],
     orders: (usize, usize, usize),
 ) -> Result<Vec<f64>, SimError> {
-    nominal_simulation_on(u, y, orders, u)
+    nominal_simulation_on(&[u], y, orders, &[u])
 }
 
-/// [`nominal_simulation_of`] fitted on one record (`u_fit`, `y_fit`) and simulated on another
-/// input `u`, from rest at its first sample: a nominal identified on an earlier experiment (a
-/// commissioning record) and run over a later one, as a user runs a model over a new record. An
-/// ARX without a steady state (an integrator) starts at the fit record's first output.
+/// [`nominal_simulation_of`] fitted on one record (inputs `u_fit`, output `y_fit`) and simulated
+/// on other inputs `u`, from rest at their first sample: a nominal identified on an earlier
+/// experiment (a commissioning record) and run over a later one, as a user runs a model over a
+/// new record. Several inputs make one MISO ARX (one denominator, a numerator and the dead time
+/// `nk` per input), as `arx` fits a multi-input record. An ARX without a steady state (an
+/// integrator) starts at the fit record's first output.
 pub fn nominal_simulation_on(
-    u_fit: &[f64],
+    u_fit: &[&[f64]],
     y_fit: &[f64],
     (na, nb, nk): (usize, usize, usize),
-    u: &[f64],
+    u: &[&[f64]],
 ) -> Result<Vec<f64>, SimError> {
-    let orders = ArxOrders { na, nb, delays: vec![nk] };
-    let arx = Arx::fit(y_fit, &[u_fit], &orders, 0..y_fit.len())
+    let orders = ArxOrders { na, nb, delays: vec![nk; u_fit.len()] };
+    let arx = Arx::fit(y_fit, u_fit, &orders, 0..y_fit.len())
         .ok_or_else(|| SimError::parameter("nominal ARX fit", y_fit.len(), "least squares failed"))?;
-    let y0 = arx.rest_output(&[u[0]]);
+    let first: Vec<f64> = u.iter().map(|x| x.first().copied().unwrap_or(f64::NAN)).collect();
+    let y0 = arx.rest_output(&first);
     let s = arx
-        .simulate_from(&[u], if y0.is_finite() { y0 } else { y_fit[0] })
+        .simulate_from(u, if y0.is_finite() { y0 } else { y_fit[0] })
         .map_err(|e| SimError::parameter("nominal ARX simulation", 0, &e.to_string()))?;
     if s.iter().any(|v| !v.is_finite() || v.abs() > 1e6 * (1.0 + var(y_fit).sqrt())) {
         return Err(SimError::parameter("nominal ARX simulation", 0, "the fitted model is unstable"));
@@ -484,7 +487,7 @@ mod tests {
         // Fitted on the first half and run over the second from rest at its first input: the
         // same plant, so the same response as the plant started there at rest.
         let (u2, y2) = (&u[300..], &y[300..]);
-        let s2 = nominal_simulation_on(&u[..300], &y[..300], (1, 1, 2), u2).unwrap();
+        let s2 = nominal_simulation_on(&[&u[..300]], &y[..300], (1, 1, 2), &[u2]).unwrap();
         let mut at_rest = vec![u2[0]; 300];
         for t in 2..300 {
             at_rest[t] = 0.9 * at_rest[t - 1] + 0.1 * u2[t - 2];
@@ -493,6 +496,24 @@ mod tests {
         assert!(gap < 1e-9, "{gap}");
         // The plant itself ran on from the first half: its second half differs at the start.
         assert!((y2[0] - at_rest[0]).abs() > 1e-3 || (y2[1] - at_rest[1]).abs() > 1e-3);
+    }
+
+    /// Two inputs make one MISO ARX: a noise-free `y(t) = 0.8 y(t−1) + 0.3 u1(t−1) − 0.1 u2(t−1)`
+    /// started at rest is reproduced by an ARX [1 1 1] on both inputs (to the solve's rounding,
+    /// 1e-9 of a unit step), and not by one that leaves the second input out.
+    #[test]
+    fn two_inputs_make_one_miso_arx() {
+        let n = 800;
+        let u1: Vec<f64> = (0..n).map(|t| if (t / 23) % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let u2: Vec<f64> = (0..n).map(|t| if (t / 37) % 3 == 0 { 2.0 } else { 0.5 }).collect();
+        let mut y = vec![(0.3 * u1[0] - 0.1 * u2[0]) / 0.2; n];
+        for t in 1..n {
+            y[t] = 0.8 * y[t - 1] + 0.3 * u1[t - 1] - 0.1 * u2[t - 1];
+        }
+        let err = |s: &[f64]| s.iter().zip(&y).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let both = nominal_simulation_on(&[&u1, &u2], &y, (1, 1, 1), &[&u1, &u2]).unwrap();
+        assert!(err(&both) < 1e-9, "{}", err(&both));
+        assert!(err(&nominal_simulation_of(&u1, &y, (1, 1, 1)).unwrap()) > 1e-3);
     }
 
     /// Every case runs on a few seeds, its nominal is finite, and the nominal of the linear

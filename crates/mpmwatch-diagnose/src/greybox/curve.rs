@@ -33,8 +33,8 @@ impl Model<'_> {
     /// ([`Element::trace`]) over its range, `None` when it has none.
     pub fn curve(&self, f: &Fitted, d: &Data<'_>, input: &str, output: &str) -> Option<ElementCurve> {
         let sig = self.element.signals(&f.p, &d.u, self.input).len();
-        let g0 = self.orders.na + sig * self.orders.nb;
-        let gamma = &f.theta[g0..g0 + self.element.feedbacks()];
+        let l = self.layout(sig);
+        let gamma = &f.theta[l.gamma()];
         let (x_label, (lo, hi), y_label) = self.element.map_axes(d, self.input, input, output);
         let pad = 0.1 * (hi - lo).max(f64::MIN_POSITIVE);
         let at = |k: usize| lo - pad + (hi - lo + 2.0 * pad) * k as f64 / 200.0;
@@ -52,11 +52,13 @@ impl Model<'_> {
                 baseline,
             ));
         }
-        // Steady-state gain of each signal's numerator through the poles.
-        let (na, nb) = (self.orders.na, self.orders.nb);
-        let poles = 1.0 - f.theta[..na].iter().sum::<f64>();
-        let dc: Vec<f64> =
-            (0..sig).map(|s| f.theta[na + s * nb..na + (s + 1) * nb].iter().sum::<f64>() / poles).collect();
+        // Steady-state gain of each signal's numerator through its channel's poles.
+        let dc: Vec<f64> = (0..sig)
+            .map(|s| {
+                let poles = 1.0 - f.theta[l.alpha(l.channel(s))].iter().sum::<f64>();
+                f.theta[l.beta(s)].iter().sum::<f64>() / poles
+            })
+            .collect();
         let points = (0..=200)
             .map(|k| {
                 let v = at(k);

@@ -6,7 +6,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{ElementCurve, Fitted, Names, Orders};
+use super::{ElementCurve, Fitted, Layout, Names, Orders};
 use crate::candidates::Physics;
 use crate::describe::num;
 use crate::nominal::NominalArx;
@@ -18,18 +18,20 @@ use crate::nominal::NominalArx;
 /// still a start.
 const FIRST_MOVE: f64 = 0.01;
 
-/// Response of input `i` through the linear part of a fitted linear structure to a unit step
-/// at sample 1 (as the nominal's channel is stepped).
+/// Response of input `i` through its channel of a fitted linear structure (the linear model on
+/// input 0, [`Layout`]) to a unit step at sample 1 (as the nominal's channel is stepped).
 fn step(f: &Fitted, orders: &Orders, i: usize, n: usize) -> Vec<f64> {
+    let l = Layout::new(orders, orders.nk.len(), 0, 0);
+    let (a, b) = (l.alpha(i).start, l.beta(i).start);
     let mut x = vec![0.0; n];
     for t in 0..n {
         let mut v = 0.0;
         for k in 1..=orders.na.min(t) {
-            v += f.theta[k - 1] * x[t - k];
+            v += f.theta[a + k - 1] * x[t - k];
         }
         for k in 0..orders.nb {
             if t > orders.nk[i] + k {
-                v += f.theta[orders.na + i * orders.nb + k];
+                v += f.theta[b + k];
             }
         }
         x[t] = v;

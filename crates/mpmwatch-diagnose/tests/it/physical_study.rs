@@ -35,14 +35,22 @@
 //! rest, and the second half alone is diagnosed. Its draws are not those of the same seed
 //! without it (the input is drawn twice as long, and what is drawn after it takes other
 //! values), and the other shifts act on the whole record first: a `DRIFT` is spread over both
-//! halves, a `PIN` quantile is taken over both, a `DELAY` shortens both.
+//! halves, a `PIN` quantile is taken over both, a `DELAY` shortens both. A tenth,
+//! `SECOND=share`, gives the output a second input: the class's own kind of input signal drawn
+//! from another seed, acting through a linear first-order lag (one sample of dead time, a time
+//! constant of 0.3 to 1.5 times the input's correlation time) whose response has `share` of the
+//! plant output's variance, either sign. It is part of the plant: it comes before every other
+//! shift, and the user's nominal is one MISO ARX fitted on both inputs (one denominator, so
+//! the two paths' different poles are themselves a mismatch a linear model shares out). A
+//! nonlinear case is then right only when its element is named in `u1`'s channel; the
+//! clipping sensor is left out, since its clip would have to read the two paths' sum and the
+//! generator clips the first path alone. It does not combine with `DELAY`.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
 use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose, fit_pct};
 use mpmwatch_sim::physical_cases::{
-    PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_of, nominal_simulation_on,
-    run_with,
+    PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_on, run_with,
 };
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -54,10 +62,17 @@ pub(crate) fn diagnose_record(r: &PhysicalRecord) -> Diagnosis {
 
 /// `r` diagnosed against the simulation `s`.
 pub(crate) fn diagnose_against(r: &PhysicalRecord, s: &[f64]) -> Diagnosis {
+    diagnose_with(r, s, None)
+}
+
+/// `r`, with the second input `u2` when there is one (`SECOND`), diagnosed against `s`.
+fn diagnose_with(r: &PhysicalRecord, s: &[f64], u2: Option<&[f64]>) -> Diagnosis {
     let time: Vec<f64> = (0..r.y.len()).map(|k| k as f64).collect();
+    let mut inputs = vec![Signal { name: "u1", values: &r.u }];
+    inputs.extend(u2.map(|values| Signal { name: "u2", values }));
     let input = DiagnoseInput {
         time: &time,
-        inputs: vec![Signal { name: "u1", values: &r.u }],
+        inputs,
         excitations: None,
         outputs: vec![Signal { name: "y1", values: &r.y }],
         simulated: vec![Signal { name: "y1", values: s }],
@@ -78,6 +93,8 @@ struct Outcome {
     physics: &'static str,
     /// Whether the named element acts on the output (a sensor).
     on_output: bool,
+    /// The input the named finding is on (empty without one).
+    input: String,
     before: f64,
     after: f64,
 }
@@ -86,8 +103,9 @@ fn outcome(d: &Diagnosis) -> Outcome {
     let named = d.report.findings.iter().find(|f| f.physics != Physics::Unexplained);
     let physics = named.map_or("none", |f| f.physics.name());
     let on_output = named.is_some_and(|f| f.acts_on == ActsOn::Output);
+    let input = named.map_or(String::new(), |f| f.input.clone());
     let h = &d.report.holdout;
-    Outcome { physics, on_output, before: h.fit_before_pct["y1"], after: h.fit_after_pct["y1"] }
+    Outcome { physics, on_output, input, before: h.fit_before_pct["y1"], after: h.fit_after_pct["y1"] }
 }
 
 /// Right: a nonlinear case named by an accepted class; a linear plant with no finding or a
@@ -214,9 +232,60 @@ fn env_number(name: &str) -> Option<f64> {
     std::env::var(name).ok().map(|v| v.parse().unwrap_or_else(|_| panic!("{name}=number")))
 }
 
-/// `r` under the study's shifts (`NOMINAL`, `WHITE`, `SENSOR`, `DELAY`, `QUANT`, `DRIFT`, `PIN`; the module's doc),
-/// unchanged without them.
-fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
+/// `SECOND=share`: the share of the plant output's variance a second input's path carries,
+/// when it is set.
+fn second() -> Option<f64> {
+    env_number("SECOND")
+}
+
+/// `r` with a second input acting on the output (the `SECOND` shift, the module's doc), and that
+/// input. Its draws come from their own streams of the case's seed. The nominal is left as it
+/// was, for the caller to refit on both inputs.
+fn with_second(mut r: PhysicalRecord, share: f64) -> (PhysicalRecord, Vec<f64>) {
+    let n = r.y.len();
+    let u2 = run_with(r.case, n, r.seed ^ 0x0005_EC0D_0000, signal()).expect("the second input").u;
+    let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x0005_EC0D_0001);
+    let tau = (correlation_time(&u2) * (0.3 + 1.2 * rng.random::<f64>())).max(1.0);
+    let a = (-1.0 / tau).exp();
+    let m = mean(&u2);
+    // At rest at the first input, as the plant's own path starts.
+    let mut x = vec![u2[0] - m; n];
+    for t in 1..n {
+        x[t] = a * x[t - 1] + (1.0 - a) * (u2[t - 1] - m);
+    }
+    let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+    let g =
+        sign * (share * std_dev(&r.plant, 0).powi(2) / std_dev(&x, 0).powi(2).max(f64::MIN_POSITIVE)).sqrt();
+    for ((y, p), x) in r.y.iter_mut().zip(r.plant.iter_mut()).zip(&x) {
+        *y += g * x;
+        *p += g * x;
+    }
+    r.description += &format!(
+        "; a second input through a lag of {tau:.0} samples, {share:.2} of the variance, {sign:+.0}"
+    );
+    (r, u2)
+}
+
+/// The first lag at which `u`'s autocorrelation falls below 1/e, samples (the input's own time
+/// scale, whether it is held in steps or filtered noise); `u.len()` if it never does.
+fn correlation_time(u: &[f64]) -> f64 {
+    let m = mean(u);
+    let c = |k: usize| u.iter().zip(&u[k..]).map(|(a, b)| (a - m) * (b - m)).sum::<f64>();
+    let c0 = c(0).max(f64::MIN_POSITIVE);
+    (1..u.len()).find(|&k| c(k) / c0 < (-1.0f64).exp()).unwrap_or(u.len()) as f64
+}
+
+/// `r` under the study's shifts (`SECOND`, `NOMINAL`, `WHITE`, `SENSOR`, `DELAY`, `QUANT`,
+/// `DRIFT`, `PIN`; the module's doc), unchanged without them, and the second input if any.
+fn shifted(r: PhysicalRecord) -> (PhysicalRecord, Option<Vec<f64>>) {
+    let (mut r, u2) = match second() {
+        Some(share) => {
+            assert!(delay().is_none(), "SECOND does not combine with DELAY");
+            let (r, u2) = with_second(r, share);
+            (r, Some(u2))
+        }
+        None => (r, None),
+    };
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
     let orders = nominal_orders();
     if let Some(share) = white {
@@ -259,14 +328,16 @@ fn shifted(mut r: PhysicalRecord) -> PhysicalRecord {
         r = pinned(r, q, rng.random::<bool>());
     }
     let more = env_number("QUANT").is_some() || env_number("DRIFT").is_some() || pin().is_some();
-    if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() || more {
+    if white.is_some() || orders.is_some() || sensor().is_some() || delay().is_some() || more || u2.is_some()
+    {
         let o = orders.unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
         if orders.is_some() {
             r.description += &format!("; nominal ARX [{} {} {}]", o.0, o.1, o.2);
         }
-        r.s = nominal_simulation_of(&r.u, &r.y, o).expect("nominal");
+        let u: Vec<&[f64]> = [Some(r.u.as_slice()), u2.as_deref()].into_iter().flatten().collect();
+        r.s = nominal_simulation_on(&u, &r.y, o, &u).expect("nominal");
     }
-    r
+    (r, u2)
 }
 
 /// `NOMINAL=na,nb,nk`: the orders of the user's nominal ARX, when they are set.
@@ -288,15 +359,24 @@ fn commission() -> bool {
 /// commissioning experiment on the same plant, and run over the rest from rest at its first
 /// input, as a user runs a model over a new record; the rest is the record diagnosed. The plant
 /// ran on between the two: its state carries over.
-fn commissioned(mut r: PhysicalRecord, n: usize) -> PhysicalRecord {
+fn commissioned(
+    (mut r, mut u2): (PhysicalRecord, Option<Vec<f64>>),
+    n: usize,
+) -> (PhysicalRecord, Option<Vec<f64>>) {
     let o = nominal_orders().unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
     let n = n.min(r.y.len() / 2);
-    r.s = nominal_simulation_on(&r.u[..n], &r.y[..n], o, &r.u[n..]).expect("nominal");
+    let inputs: Vec<&[f64]> = [Some(r.u.as_slice()), u2.as_deref()].into_iter().flatten().collect();
+    let first: Vec<&[f64]> = inputs.iter().map(|u| &u[..n]).collect();
+    let rest: Vec<&[f64]> = inputs.iter().map(|u| &u[n..]).collect();
+    r.s = nominal_simulation_on(&first, &r.y[..n], o, &rest).expect("nominal");
     r.u.drain(..n);
     r.y.drain(..n);
     r.plant.drain(..n);
+    if let Some(u2) = u2.as_mut() {
+        u2.drain(..n);
+    }
     r.description += "; the nominal fitted on a commissioning record before it";
-    r
+    (r, u2)
 }
 
 #[test]
@@ -308,18 +388,22 @@ fn study() {
     for case in PhysicalCase::ALL {
         if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str()))
             || (sensor().is_some() && case != PhysicalCase::Linear)
+            || (second().is_some() && case == PhysicalCase::ClippingSensor)
         {
             continue;
         }
         let mut case_right = 0;
         for seed in a..b {
-            let r = if commission() {
+            let (r, u2) = if commission() {
                 commissioned(shifted(run_with(case, 2 * n, seed, signal()).unwrap()), n)
             } else {
                 shifted(run_with(case, n, seed, signal()).unwrap())
             };
-            let d = diagnose_record(&r);
+            let d = diagnose_with(&r, &r.s, u2.as_deref());
             let o = outcome(&d);
+            // With a second input a nonlinear element must be named in the channel it is in:
+            // `u1`'s (a fed-back force or an output map sits in one channel's dynamics too).
+            let on_its_input = u2.is_none() || case.accepted().is_empty() || o.input == "u1";
             let ok = if sensor().is_some() {
                 o.physics == "quadratic" && o.on_output
             } else {
@@ -334,7 +418,7 @@ fn study() {
                         && f.summary.contains("instrument reads")
                         && f.summary.contains("an instrument's range or a hard limit")
                 });
-                (is_right(case, o.physics) && !range_alone) || linear_clip
+                (is_right(case, o.physics) && !range_alone && on_its_input) || linear_clip
             };
             let fell = o.physics != "none" && o.after < o.before;
             total += 1;
@@ -366,7 +450,12 @@ fn study() {
                 "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} (the true plant {:6.1}) | {} | tried {:?} | beyond {:?}",
                 case.name(),
                 if ok { "ok" } else { "NO" },
-                if o.on_output { format!("{} (output)", o.physics) } else { o.physics.to_string() },
+                match (o.on_output, u2.is_some() && !o.input.is_empty()) {
+                    (true, true) => format!("{} (output, {})", o.physics, o.input),
+                    (true, false) => format!("{} (output)", o.physics),
+                    (false, true) => format!("{} ({})", o.physics, o.input),
+                    (false, false) => o.physics.to_string(),
+                },
                 o.before,
                 o.after,
                 if fell { " FELL" } else { "" },
