@@ -358,7 +358,7 @@ impl Layout {
     /// `common`, the coefficients of one denominator shared by every signal (`α`, `β`, `γ`,
     /// `δ`, `c`, as the equation error fits them), laid out with that denominator copied to
     /// every other channel: the same model, since `Σ_s (B_s/A)·w_s` is `Σ_s B_s·w_s / A`.
-    fn from_shared(&self, common: &[f64]) -> Vec<f64> {
+    fn spread_shared(&self, common: &[f64]) -> Vec<f64> {
         let na = self.na.min(common.len());
         let mut theta = common[..na].to_vec();
         for _ in self.others() {
@@ -617,7 +617,7 @@ impl Model<'_> {
         let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
         let common = least_squares_rows(&refs, y, &used)?;
         let l = self.layout(sig.len());
-        let theta = l.from_shared(&common);
+        let theta = l.spread_shared(&common);
         debug_assert_eq!(theta.len(), l.len());
         Some(Fitted { p: p.to_vec(), theta, noise: Vec::new() })
     }
