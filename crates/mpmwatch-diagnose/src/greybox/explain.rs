@@ -71,7 +71,7 @@ use crate::describe::num;
 use std::collections::BTreeMap;
 
 use super::clip_sensor::ClipSensor;
-use super::linear_change::{at_the_bound, linear_change};
+use super::linear_change::{at_the_bound, changed_most, linear_change};
 use super::{
     Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, drift_gain, drift_is_one_line,
     elements, fit, linear_orders, max_dead_time, nominal_cv_fit, pinned, starting_at,
@@ -312,13 +312,20 @@ fn candidates(
         }
     }
     let mut scored: Vec<Scored> = Vec::new();
+    // In open loop the localisation's MI against a least-squares nominal's residual misses
+    // much of what a fit shows (see `crate::explain`), so an element is tried on every input;
+    // with dithers and a noise model, on the flagged ones.
+    let candidates: Vec<usize> = if d.noise_order == 0 { (0..d.u.len()).collect() } else { flagged.to_vec() };
+    let first = flagged.first().copied().unwrap_or(0);
     let static_part = order_sets.len();
     order_sets.push(Orders { na: 0, nb: 1, ..r.from_nominal.clone() });
     for (o, orders) in order_sets.iter().enumerate() {
         for (k, el) in els.iter().enumerate().filter(|(_, el)| o < static_part || el.carries_dynamics()) {
+            // An output map reads the sum of every channel, so one channel carries it as well as
+            // another; a fed-back force sits in the channel whose output it feeds back.
             let inputs: Vec<usize> = match el.acts_on() {
-                ActsOn::Input => flagged.to_vec(),
-                ActsOn::Output => flagged.iter().take(1).copied().collect(),
+                ActsOn::Output if el.feedbacks() == 0 => vec![first],
+                _ => candidates.clone(),
             };
             for &i in inputs.iter().filter(|&&i| el.identifiable(d, i)) {
                 let m = Model { element: el.as_ref(), input: i, orders: orders.clone() };
@@ -449,7 +456,11 @@ impl Judge<'_> {
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
         let f = fit(&m, d, &self.train_rows)?;
         let sim = self.reportable(&m, &f, Physics::Unexplained, v, &r.nominal_cv)?;
-        let i = self.flagged.first().copied().unwrap_or(0);
+        let i = if d.u.len() > 1 {
+            changed_most(self.nominal, &f, orders, &d.u, d.train.clone())
+        } else {
+            self.flagged.first().copied().unwrap_or(0)
+        };
         let modelled = self.nominal.has_channel(i, d.u[i], self.s);
         let (physics, mut summary, parameters, curve) =
             linear_change(self.nominal, &f, orders, i, modelled, self.ts, names);

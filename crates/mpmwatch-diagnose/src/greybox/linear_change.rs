@@ -10,6 +10,7 @@ use super::{ElementCurve, Fitted, Layout, Names, Orders};
 use crate::candidates::Physics;
 use crate::describe::num;
 use crate::nominal::NominalArx;
+use mpmwatch_core::numerics::median;
 
 /// The share of its final value a step response must pass to have moved. A re-fit from noisy
 /// data puts a small coefficient on every tap it is given, and one ahead of the true dead time
@@ -21,22 +22,55 @@ const FIRST_MOVE: f64 = 0.01;
 /// Response of input `i` through its channel of a fitted linear structure (the linear model on
 /// input 0, [`Layout`]) to a unit step at sample 1 (as the nominal's channel is stepped).
 fn step(f: &Fitted, orders: &Orders, i: usize, n: usize) -> Vec<f64> {
+    let mut u = vec![1.0; n];
+    u[0] = 0.0;
+    response(f, orders, i, &u)
+}
+
+/// Input `i`'s contribution through its channel of a fitted linear structure (the linear model
+/// on input 0, [`Layout`]) to `x`, from rest at `x(0)` (from 0 for a channel without a steady
+/// state), as [`NominalArx::channel`] gives the nominal's.
+fn response(f: &Fitted, orders: &Orders, i: usize, x: &[f64]) -> Vec<f64> {
     let l = Layout::new(orders, orders.nk.len(), 0, 0);
-    let (a, b) = (l.alpha(i).start, l.beta(i).start);
-    let mut x = vec![0.0; n];
-    for t in 0..n {
+    let (alpha, beta) = (&f.theta[l.alpha(i)], &f.theta[l.beta(i)]);
+    let x0 = x.first().copied().unwrap_or(0.0);
+    let den = 1.0 - alpha.iter().sum::<f64>();
+    let rest = if den.abs() > 1e-9 { beta.iter().sum::<f64>() * x0 / den } else { 0.0 };
+    let mut y = vec![0.0; x.len()];
+    for t in 0..x.len() {
         let mut v = 0.0;
-        for k in 1..=orders.na.min(t) {
-            v += f.theta[a + k - 1] * x[t - k];
+        for (k, a) in alpha.iter().enumerate() {
+            v += a * if t > k { y[t - k - 1] } else { rest };
         }
-        for k in 0..orders.nb {
-            if t > orders.nk[i] + k {
-                v += f.theta[b + k];
-            }
+        for (k, b) in beta.iter().enumerate() {
+            let lag = orders.nk[i] + k;
+            v += b * if t >= lag { x[t - lag] } else { x0 };
         }
-        x[t] = v;
+        y[t] = v;
     }
-    x
+    y
+}
+
+/// The input whose channel a fitted linear structure (the linear model on input 0) changes
+/// most against the nominal's: the largest RMS difference, over `rows`, between the two
+/// channels' responses to the recorded input (about its median). With several inputs a re-fit
+/// changes every channel a little; the finding names the one it changes most.
+pub(super) fn changed_most(
+    nominal: &NominalArx,
+    f: &Fitted,
+    orders: &Orders,
+    u: &[&[f64]],
+    rows: std::ops::Range<usize>,
+) -> usize {
+    let gap = |i: usize| {
+        let m = median(u[i]);
+        let x: Vec<f64> = u[i].iter().map(|v| v - m).collect();
+        let (new, old) = (response(f, orders, i, &x), nominal.channel(i, &x));
+        let rows = rows.start.min(x.len())..rows.end.min(x.len());
+        let n = rows.len().max(1) as f64;
+        (rows.map(|t| (new[t] - old[t]).powi(2)).sum::<f64>() / n).sqrt()
+    };
+    (0..u.len()).map(|i| (i, gap(i))).fold((0, f64::NEG_INFINITY), |b, c| if c.1 > b.1 { c } else { b }).0
 }
 
 /// The first move of a step response (the first sample beyond [`FIRST_MOVE`] of its final
@@ -205,6 +239,28 @@ mod tests {
         // A flat response has no move; its rise is half a sample, not zero.
         assert_eq!(rise(&[0.0; 5]), (0, 1.0));
         assert_eq!(rise(&[0.0, 0.0, 1.0]), (2, 0.5));
+    }
+
+    /// With two inputs the finding names the channel the re-fit changes most. The model:
+    /// `y(t) = 0.8 y(t−1) + 0.2 u1(t−1) + 0.1 u2(t−1)`. A re-fit that keeps u1's channel and
+    /// triples u2's gain names u2, and its u1 channel answers the record exactly as the model's
+    /// does (to rounding, 1e-12, both from rest); one that changes u1's gain instead names u1.
+    #[test]
+    fn the_channel_a_refit_changes_most_is_named() {
+        let arx = Arx::new(vec![1.0, -0.8], vec![vec![0.0, 0.2], vec![0.0, 0.1]], vec![0, 0]).unwrap();
+        let model = NominalArx { arx, fit_pct: 100.0, score: f64::INFINITY };
+        let n = 600;
+        let u1: Vec<f64> = (0..n).map(|t| if (t / 31) % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let u2: Vec<f64> = (0..n).map(|t| ((t / 19) % 3) as f64 - 1.0).collect();
+        let orders = Orders { na: 1, nb: 1, nk: vec![1, 1], trend: false, reading: None };
+        // [α of u1's channel, α of u2's, β of u1, β of u2, c].
+        let u2_tripled = Fitted { p: vec![], theta: vec![0.8, 0.8, 0.2, 0.3, 0.0], noise: vec![] };
+        assert_eq!(changed_most(&model, &u2_tripled, &orders, &[&u1, &u2], 0..n), 1);
+        let same = response(&u2_tripled, &orders, 0, &u1);
+        let own = model.channel(0, &u1);
+        assert!(same.iter().zip(&own).all(|(a, b)| (a - b).abs() < 1e-12));
+        let u1_doubled = Fitted { p: vec![], theta: vec![0.8, 0.8, 0.4, 0.1, 0.0], noise: vec![] };
+        assert_eq!(changed_most(&model, &u1_doubled, &orders, &[&u1, &u2], 0..n), 0);
     }
 
     #[test]

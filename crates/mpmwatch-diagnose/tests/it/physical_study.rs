@@ -485,6 +485,9 @@ fn study() {
                 for f in &d.report.findings {
                     eprintln!("    {}: {} {:?}", f.physics.name(), f.summary, f.parameters);
                 }
+                for c in &d.report.channels {
+                    eprintln!("    {}→{}: {}", c.input, c.output, c.verdict);
+                }
             }
         }
         eprintln!("== {}: {case_right}/{}", case.name(), b - a);
