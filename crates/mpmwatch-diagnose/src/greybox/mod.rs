@@ -800,9 +800,8 @@ mod tests {
     /// and at rest at the start: one pole per channel ([`Layout`]) holds it, so the fit on the
     /// first 1400 rows recovers every coefficient (the optimiser's tolerance; 1e-3) and
     /// simulates the 600 rows after them exactly (FIT above 99.9 %), and the slowest pole is
-    /// the first channel's 0.9. The same orders with the second input's path sharing the
-    /// first's pole are the one-denominator ARX of before, which cannot follow both: its best
-    /// start, the equation-error fit, falls short.
+    /// the first channel's 0.9. One denominator shared by both inputs cannot follow both: the
+    /// equation-error start, which shares it, falls short.
     #[test]
     fn each_input_has_a_channel_with_its_own_poles() {
         let n = 2000;
