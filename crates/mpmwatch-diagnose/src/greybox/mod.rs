@@ -487,7 +487,8 @@ impl Model<'_> {
             .map(|&j| {
                 let den = 1.0 - f.theta[l.alpha(j)].iter().sum::<f64>();
                 let gain = f.theta[l.beta(j)].iter().sum::<f64>();
-                let rest = if den.abs() > 1e-9 { gain * sig[j][0] / den } else { 0.0 };
+                let rest =
+                    if den.abs() > 1e-9 { gain * sig[j].first().copied().unwrap_or(0.0) / den } else { 0.0 };
                 vec![rest; n]
             })
             .collect();

@@ -38,8 +38,8 @@
 //! halves, a `PIN` quantile is taken over both, a `DELAY` shortens both. A tenth,
 //! `SECOND=share`, gives the output a second input: the class's own kind of input signal drawn
 //! from another seed, acting through a linear first-order lag (one sample of dead time, a time
-//! constant of 0.3 to 1.5 times the input's correlation time) whose response has `share` of the
-//! plant output's variance, either sign. It is part of the plant: it comes before every other
+//! constant of 0.3 to 1.5 times the input's correlation time) whose response has `share` times
+//! the first path's variance (about `share/(1 + share)` of the sum's), either sign. It is part of the plant: it comes before every other
 //! shift, and the user's nominal is one MISO ARX fitted on both inputs (one denominator, so
 //! the two paths' different poles are themselves a mismatch a linear model shares out). A
 //! nonlinear case is then right only when its element is named in `u1`'s channel; the
