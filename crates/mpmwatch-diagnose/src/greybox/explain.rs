@@ -73,8 +73,8 @@ use std::collections::BTreeMap;
 use super::clip_sensor::ClipSensor;
 use super::linear_change::{at_the_bound, changed_most, linear_change};
 use super::{
-    Beside, CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, drift_gain, drift_is_one_line,
-    elements, fit, linear_orders, max_dead_time, nominal_cv_fit, pinned, starting_at,
+    Beside, CvScore, Data, Element, Fitted, Layout, Linear, Model, Orders, cv_fit, drift_gain,
+    drift_is_one_line, elements, fit, linear_orders, max_dead_time, nominal_cv_fit, pinned, starting_at,
 };
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
@@ -753,16 +753,12 @@ fn settling_time(m: &Model<'_>, f: &Fitted) -> f64 {
     if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() }
 }
 
-/// Free parameters of an element on the linear orders, the drift term included.
+/// Free parameters of an element on the linear orders: the element's own and every
+/// coefficient of its [`Layout`], each input's channel with its poles, the drift term included.
 fn complexity(el: &dyn Element, d: &Data<'_>, i: usize, orders: &Orders) -> usize {
     let p = el.starts(d, i).into_iter().next().unwrap_or_default();
     let signals = el.signals(&p, &d.u, i).len();
-    p.len().saturating_sub(el.fixed())
-        + orders.na
-        + signals * orders.nb
-        + el.feedbacks()
-        + usize::from(orders.trend)
-        + 1
+    p.len().saturating_sub(el.fixed()) + Layout::new(orders, signals, i, el.feedbacks()).len()
 }
 
 #[cfg(test)]
@@ -791,6 +787,21 @@ mod tests {
             nominal_orders(&n, 2, 20),
             Orders { na: 3, nb: 3, nk: vec![0, 0], trend: false, reading: None }
         );
+    }
+
+    /// A structure's free parameters count every channel's poles: the linear re-fit of
+    /// `na = 2`, `nb = 2` has 2 + 2 + 1 (the constant) with one input and 2·2 + 2·2 + 1 with
+    /// two, each input's channel with its own denominator ([`Layout`]); a drift adds one.
+    #[test]
+    fn complexity_counts_every_channels_poles() {
+        let u = vec![0.0; 100];
+        let orders =
+            |inputs: usize, trend: bool| Orders { na: 2, nb: 2, nk: vec![1; inputs], trend, reading: None };
+        let one = Data { u: vec![&u], y: &u, train: 0..100, nominal: None, noise_order: 0 };
+        let two = Data { u: vec![&u, &u], y: &u, train: 0..100, nominal: None, noise_order: 0 };
+        assert_eq!(complexity(&Linear, &one, 0, &orders(1, false)), 5);
+        assert_eq!(complexity(&Linear, &two, 0, &orders(2, false)), 9);
+        assert_eq!(complexity(&Linear, &two, 1, &orders(2, true)), 10);
     }
 
     /// The settling tests' input: a staircase of 1500 rows between −1 and 1.
