@@ -124,7 +124,10 @@ enum Verb {
     /// (docs/diagnose-history.md, stop 45). Time grows about in proportion to the record: one
     /// open-loop output took 16 to 32 s at 3000 samples and 1.4 to 5.5 min at 24 000 on a
     /// 2-core machine (docs/diagnose.md, "Time against record length"); cut a much longer
-    /// record to a window that holds the slow modes several times over.
+    /// record to a window that holds the slow modes several times over. In open loop every
+    /// element is tried on every input and each input has a channel of its own to fit: in the
+    /// generated cases two inputs took about four times as long as one (docs/diagnose-history.md,
+    /// stop 63).
     ///
     /// Progress: each stage as it starts goes to stderr with the seconds since the start
     /// (locating, each output explained, done); stdout keeps the findings and FITs alone.
