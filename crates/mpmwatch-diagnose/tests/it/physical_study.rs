@@ -39,12 +39,14 @@
 //! `SECOND=share`, gives the output a second input: the class's own kind of input signal drawn
 //! from another seed, acting through a linear first-order lag (one sample of dead time, a time
 //! constant of 0.3 to 1.5 times the input's correlation time) whose response has `share` times
-//! the first path's variance (about `share/(1 + share)` of the sum's), either sign. It is part of the plant: it comes before every other
-//! shift, and the user's nominal is one MISO ARX fitted on both inputs (one denominator, so
-//! the two paths' different poles are themselves a mismatch a linear model shares out). A
-//! nonlinear case is then right only when its element is named in `u1`'s channel; the
-//! clipping sensor is left out, since its clip would have to read the two paths' sum and the
-//! generator clips the first path alone. It does not combine with `DELAY`.
+//! the first path's variance (about `share/(1 + share)` of the sum's), either sign. It is part
+//! of the plant: it comes before every other shift, and the user's nominal is one MISO ARX
+//! fitted on both inputs (one denominator, so the two paths' different poles are themselves a
+//! mismatch a linear model shares out, and a linear change may rightly be named in `u2`'s
+//! channel: docs/diagnose-history.md, stop 63). A nonlinear case is then right only when its
+//! element is named in `u1`'s channel; the clipping sensor is left out, since its clip would
+//! have to read the two paths' sum and the generator clips the first path alone. It does not
+//! combine with `DELAY`.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
