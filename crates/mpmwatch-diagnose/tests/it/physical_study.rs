@@ -46,7 +46,10 @@
 //! channel: docs/diagnose-history.md, stop 63). A nonlinear case is then right only when its
 //! element is named in `u1`'s channel; the clipping sensor is left out, since its clip would
 //! have to read the two paths' sum and the generator clips the first path alone. It does not
-//! combine with `DELAY`.
+//! combine with `DELAY`. With `KNOWN=1` the user's model of the second path is that path
+//! exactly (a submodel identified before, as an MPC's model is kept per input), the first
+//! input's ARX is fitted on what the second path leaves, and every finding must then be in
+//! `u1`'s channel, a linear change too. It does not combine with `COMMISSION`.
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
@@ -240,10 +243,16 @@ fn second() -> Option<f64> {
     env_number("SECOND")
 }
 
-/// `r` with a second input acting on the output (the `SECOND` shift, the module's doc), and that
-/// input. Its draws come from their own streams of the case's seed. The nominal is left as it
-/// was, for the caller to refit on both inputs.
-fn with_second(mut r: PhysicalRecord, share: f64) -> (PhysicalRecord, Vec<f64>) {
+/// Whether `KNOWN=1` is set: under `SECOND`, the user's model of the second input's path is
+/// that path exactly, and only the first input's is fitted.
+fn known() -> bool {
+    std::env::var("KNOWN").is_ok_and(|v| v == "1")
+}
+
+/// `r` with a second input acting on the output (the `SECOND` shift, the module's doc), that
+/// input, and its path's response. Its draws come from their own streams of the case's seed. The
+/// nominal is left as it was, for the caller to refit.
+fn with_second(mut r: PhysicalRecord, share: f64) -> (PhysicalRecord, Vec<f64>, Vec<f64>) {
     let n = r.y.len();
     let u2 = run_with(r.case, n, r.seed ^ 0x0005_EC0D_0000, signal()).expect("the second input").u;
     let mut rng = ChaCha8Rng::seed_from_u64(r.seed ^ 0x0005_EC0D_0001);
@@ -258,14 +267,15 @@ fn with_second(mut r: PhysicalRecord, share: f64) -> (PhysicalRecord, Vec<f64>) 
     let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
     let g =
         sign * (share * std_dev(&r.plant, 0).powi(2) / std_dev(&x, 0).powi(2).max(f64::MIN_POSITIVE)).sqrt();
-    for ((y, p), x) in r.y.iter_mut().zip(r.plant.iter_mut()).zip(&x) {
-        *y += g * x;
-        *p += g * x;
+    let path: Vec<f64> = x.iter().map(|x| g * x).collect();
+    for ((y, p), x) in r.y.iter_mut().zip(r.plant.iter_mut()).zip(&path) {
+        *y += x;
+        *p += x;
     }
     r.description += &format!(
         "; a second input through a lag of {tau:.0} samples, {share:.2} of the variance, {sign:+.0}"
     );
-    (r, u2)
+    (r, u2, path)
 }
 
 /// The first lag at which `u`'s autocorrelation falls below 1/e, samples (the input's own time
@@ -280,13 +290,16 @@ fn correlation_time(u: &[f64]) -> f64 {
 /// `r` under the study's shifts (`SECOND`, `NOMINAL`, `WHITE`, `SENSOR`, `DELAY`, `QUANT`,
 /// `DRIFT`, `PIN`; the module's doc), unchanged without them, and the second input if any.
 fn shifted(r: PhysicalRecord) -> (PhysicalRecord, Option<Vec<f64>>) {
-    let (mut r, u2) = match second() {
+    let (mut r, u2, path) = match second() {
         Some(share) => {
             assert!(delay().is_none(), "SECOND does not combine with DELAY");
-            let (r, u2) = with_second(r, share);
-            (r, Some(u2))
+            let (r, u2, path) = with_second(r, share);
+            (r, Some(u2), Some(path))
         }
-        None => (r, None),
+        None => {
+            assert!(!known(), "KNOWN needs SECOND");
+            (r, None, None)
+        }
     };
     let white: Option<f64> = std::env::var("WHITE").ok().map(|v| v.parse().expect("WHITE=share"));
     let orders = nominal_orders();
@@ -336,8 +349,20 @@ fn shifted(r: PhysicalRecord) -> (PhysicalRecord, Option<Vec<f64>>) {
         if orders.is_some() {
             r.description += &format!("; nominal ARX [{} {} {}]", o.0, o.1, o.2);
         }
-        let u: Vec<&[f64]> = [Some(r.u.as_slice()), u2.as_deref()].into_iter().flatten().collect();
-        r.s = nominal_simulation_on(&u, &r.y, o, &u).expect("nominal");
+        r.s = match path.filter(|_| known()) {
+            // The second path's model exact: the first input's ARX is fitted on what the
+            // second path leaves, and the nominal is the two models' sum.
+            Some(path) => {
+                let rest: Vec<f64> = r.y.iter().zip(&path).map(|(y, p)| y - p).collect();
+                let first = nominal_simulation_on(&[&r.u], &rest, o, &[&r.u]).expect("nominal");
+                r.description += "; the second path's model exact";
+                first.iter().zip(&path).map(|(s, p)| s + p).collect()
+            }
+            None => {
+                let u: Vec<&[f64]> = [Some(r.u.as_slice()), u2.as_deref()].into_iter().flatten().collect();
+                nominal_simulation_on(&u, &r.y, o, &u).expect("nominal")
+            }
+        };
     }
     (r, u2)
 }
@@ -365,6 +390,7 @@ fn commissioned(
     (mut r, mut u2): (PhysicalRecord, Option<Vec<f64>>),
     n: usize,
 ) -> (PhysicalRecord, Option<Vec<f64>>) {
+    assert!(!known(), "KNOWN does not combine with COMMISSION");
     let o = nominal_orders().unwrap_or(mpmwatch_sim::physical_cases::NOMINAL_ORDERS);
     let n = n.min(r.y.len() / 2);
     let inputs: Vec<&[f64]> = [Some(r.u.as_slice()), u2.as_deref()].into_iter().flatten().collect();
@@ -405,7 +431,11 @@ fn study() {
             let o = outcome(&d);
             // With a second input a nonlinear element must be named in the channel it is in:
             // `u1`'s (a fed-back force or an output map sits in one channel's dynamics too).
-            let on_its_input = u2.is_none() || case.accepted().is_empty() || o.input == "u1";
+            // With the second path's model exact (`KNOWN`), a linear change must be there too.
+            let on_its_input = u2.is_none()
+                || (case.accepted().is_empty() && !known())
+                || o.physics == "none"
+                || o.input == "u1";
             let ok = if sensor().is_some() {
                 o.physics == "quadratic" && o.on_output
             } else {
