@@ -9,6 +9,7 @@ use super::{Data, Linear, Model, Orders, Reading, TREND_UNIT, fit};
 use crate::fitness::fit_pct;
 use crate::whiten::{ar_fit, whitened};
 use mpmwatch_core::numerics::least_squares_rows;
+use rayon::prelude::*;
 
 /// FIT% on each validation block of the folds, each block against its own mean as the held-out
 /// tail is scored, and their mean (the ranking score in open loop); with the RMS of the one-step
@@ -225,7 +226,7 @@ pub fn linear_orders(
             (0..ks.len()).min_by(|&a, &b| e[a].total_cmp(&e[b])).map_or(1, |a| ks[a])
         };
         let near: Vec<usize> = (0..=DEAD_TIME_FLOOR.min(longest)).collect();
-        let errors: Vec<f64> = near.iter().map(|&k| error_at(k, &nk, &near_rows)).collect();
+        let errors: Vec<f64> = near.par_iter().map(|&k| error_at(k, &nk, &near_rows)).collect();
         let mut best = argmin(&near, &errors);
         // Past the floor, a dead time replaces the floor range's best only when it simulates
         // better than that one on the same rows (those past the longest): a minimum inside the
@@ -233,12 +234,12 @@ pub fn linear_orders(
         if longest > DEAD_TIME_FLOOR {
             let grid: Vec<usize> =
                 dead_time_grid(longest).into_iter().filter(|&k| k > DEAD_TIME_FLOOR).collect();
-            let errors: Vec<f64> = grid.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
+            let errors: Vec<f64> = grid.par_iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
             let at = grid.iter().position(|&k| k == argmin(&grid, &errors)).unwrap_or(0);
             // Between the best grid point's neighbours every dead time is tried.
             let lo = if at == 0 { DEAD_TIME_FLOOR + 1 } else { grid[at - 1] };
             let fine: Vec<usize> = (lo..=grid[(at + 1).min(grid.len() - 1)]).collect();
-            let errors: Vec<f64> = fine.iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
+            let errors: Vec<f64> = fine.par_iter().map(|&k| error_at(k, &nk, &far_rows)).collect();
             let far = argmin(&fine, &errors);
             let far_error = errors[fine.iter().position(|&k| k == far).unwrap_or(0)];
             if far_error < error_at(best, &nk, &far_rows) {
@@ -247,17 +248,24 @@ pub fn linear_orders(
         }
         nk[i] = best;
     }
-    let mut best: Option<(Orders, CvScore)> = None;
-    for na in 1..=3 {
-        for nb in 1..=3 {
+    // Scored on every core, then compared in the order listed, so that a tie goes as it would
+    // on one thread.
+    let scored: Vec<(Orders, CvScore)> = (1..=3)
+        .flat_map(|na| (1..=3).map(move |nb| (na, nb)))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .filter_map(|(na, nb)| {
             let orders = Orders { na, nb, nk: nk.clone(), trend, reading: None };
             let m = Model { element: &lin, input: 0, orders: orders.clone() };
-            let Some(v) = cv_fit(&m, d, folds) else { continue };
-            // One more pole or tap must earn a tenth of a point (of FIT, or of prediction gain).
-            let score = |v: &CvScore, o: &Orders| v.rank(base, d.noise_order) - 0.1 * (o.na + o.nb) as f64;
-            if best.as_ref().is_none_or(|b| score(&v, &orders) > score(&b.1, &b.0)) {
-                best = Some((orders, v));
-            }
+            cv_fit(&m, d, folds).map(|v| (orders, v))
+        })
+        .collect();
+    let mut best: Option<(Orders, CvScore)> = None;
+    for (orders, v) in scored {
+        // One more pole or tap must earn a tenth of a point (of FIT, or of prediction gain).
+        let score = |v: &CvScore, o: &Orders| v.rank(base, d.noise_order) - 0.1 * (o.na + o.nb) as f64;
+        if best.as_ref().is_none_or(|b| score(&v, &orders) > score(&b.1, &b.0)) {
+            best = Some((orders, v));
         }
     }
     best
