@@ -11,6 +11,7 @@ use super::fit::{fit_hypothesis, fit_term, refine};
 use super::simulate::{FittedTerm, correction};
 use super::whiten::whitenable;
 use mpmwatch_core::numerics::{Projector, lagged as delayed, least_squares_rows, minus_mean};
+use rayon::prelude::*;
 
 /// How hypotheses are scored in a closed loop (open-loop records always use the plain
 /// validation error of the corrected residual).
@@ -319,13 +320,14 @@ pub fn rank(
             terms.push(Term::Bilinear(Vec::new()));
         }
         let from = out.len();
-        for t in terms {
+        // Each term is fitted and scored on its own, on every core; they come back in the
+        // order listed, so the choice does not depend on the threads.
+        out.par_extend(terms.into_par_iter().filter_map(|t| {
             // The bilinear products are chosen once by FROLS on the fit rows, then kept fixed.
-            let Some(f) = fit_term(ctx, inst, r, i, t, &fit_rows, split.whiten) else { continue };
-            if let Some((score, sse, complexity)) = fold_score(Some(&f), None) {
-                out.push(Scored { fitted: Some(f), sse, complexity, score, grid: None });
-            }
-        }
+            let f = fit_term(ctx, inst, r, i, t, &fit_rows, split.whiten)?;
+            let (score, sse, complexity) = fold_score(Some(&f), None)?;
+            Some(Scored { fitted: Some(f), sse, complexity, score, grid: None })
+        }));
         // Per class and side, its best grid term with continuous values, refined: from the grid
         // term on the fit rows for the term kept, and afresh from it on each fold's fit rows for
         // its score. Only where the score is the prediction error or the plain open-loop error:
@@ -346,15 +348,11 @@ pub fn rank(
         }
         let starts: Vec<Term> =
             starts.into_iter().filter_map(|s| s.fitted.as_ref().map(|f| f.term.clone())).collect();
-        for g in starts {
-            let Some(f) = refine(ctx, inst, r, i, &g, &fit_rows, split.whiten) else { continue };
-            if f.term == g {
-                continue;
-            }
-            if let Some((score, sse, complexity)) = fold_score(Some(&f), Some(&g)) {
-                out.push(Scored { fitted: Some(f), sse, complexity, score, grid: Some(g) });
-            }
-        }
+        out.par_extend(starts.into_par_iter().filter_map(|g| {
+            let f = refine(ctx, inst, r, i, &g, &fit_rows, split.whiten).filter(|f| f.term != g)?;
+            let (score, sse, complexity) = fold_score(Some(&f), Some(&g))?;
+            Some(Scored { fitted: Some(f), sse, complexity, score, grid: Some(g) })
+        }));
     }
     // Hypotheses stated through a physical model: its state limits when their test fired
     // (attributed to the first flagged input, since the model, not a channel, carries them), and

@@ -227,3 +227,82 @@ pub fn run_large(n: usize, seed: u64) -> Result<LargeReport, InfoError> {
         seed,
     })
 }
+
+/// Why the diagnosis timing could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseBenchError {
+    /// The generated record.
+    #[error("generating the record: {0}")]
+    Sim(#[from] mpmwatch_sim::SimError),
+    /// The diagnosis itself.
+    #[error("diagnosing the record: {0}")]
+    Diagnose(#[from] mpmwatch_diagnose::DiagnoseError),
+    /// The one-thread pool.
+    #[error("building a one-thread pool: {0}")]
+    Pool(#[from] rayon::ThreadPoolBuildError),
+}
+
+/// One open-loop grey-box diagnosis timed on one thread and on every thread of the process.
+#[derive(Debug, Clone, Serialize)]
+pub struct DiagnoseTiming {
+    /// The generated physical case.
+    pub case: &'static str,
+    /// Record length.
+    pub n: usize,
+    /// Seed of the case.
+    pub seed: u64,
+    /// Wall time on one thread, seconds.
+    pub one_thread_s: f64,
+    /// Threads of the process's pool.
+    pub threads: usize,
+    /// Wall time on every thread, seconds.
+    pub all_threads_s: f64,
+    /// What was named (the first finding's physics, `none` without one).
+    pub named: &'static str,
+    /// Whether both runs reported the same findings and held-out FITs, as they must: the
+    /// candidates' scores come back in one order whichever thread fitted them.
+    pub same: bool,
+}
+
+/// [`DiagnoseTiming`] for the Duffing oscillator of `mpmwatch_sim::physical_cases` at `seed`,
+/// `n` samples, against its least-squares ARX nominal (the `diagnose` verb's open-loop path:
+/// every element on every order set, scored by blocked cross-validation).
+pub fn run_diagnosis(n: usize, seed: u64) -> Result<DiagnoseTiming, DiagnoseBenchError> {
+    use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose};
+    use mpmwatch_sim::physical_cases::{PhysicalCase, run};
+    let case = PhysicalCase::Duffing;
+    let r = run(case, n, seed)?;
+    let time: Vec<f64> = (0..n).map(|k| k as f64).collect();
+    let input = DiagnoseInput {
+        time: &time,
+        inputs: vec![Signal { name: "u1", values: &r.u }],
+        excitations: None,
+        outputs: vec![Signal { name: "y1", values: &r.y }],
+        simulated: vec![Signal { name: "y1", values: &r.s }],
+        physical: Vec::new(),
+    };
+    let opts = DiagnoseOptions::default();
+    let timed = || {
+        let start = Instant::now();
+        diagnose(&input, &opts).map(|d| (start.elapsed().as_secs_f64(), d))
+    };
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let (one_thread_s, a) = one.install(timed)?;
+    let (all_threads_s, b) = timed()?;
+    let named =
+        a.report.findings.first().map_or("none", |f| {
+            if f.physics == Physics::Unexplained { "unexplained" } else { f.physics.name() }
+        });
+    Ok(DiagnoseTiming {
+        case: case.name(),
+        n,
+        seed,
+        one_thread_s,
+        threads: rayon::current_num_threads(),
+        all_threads_s,
+        named,
+        // Compared as JSON, where a NaN reads as `null` on both sides.
+        same: serde_json::to_string(&a.report).ok() == serde_json::to_string(&b.report).ok()
+            && a.corrected == b.corrected,
+    })
+}

@@ -60,9 +60,12 @@ enum Verb {
     /// surrogate, and the wall time of a full 3×3 norm-of-MI matrix (binary dithers, lags
     /// 1..=20, 100 surrogates per element, all threads), on seeded synthetic data. A debug
     /// build is about ten times slower. `scripts/bench_sklearn.py` sets these beside
-    /// scikit-learn's in one run.
+    /// scikit-learn's in one run. `--diagnose` times one open-loop diagnosis on one thread and
+    /// on every thread instead (docs/performance.md).
     ///
     /// Example: cargo run --release -- bench --n 2048 --json
+    ///
+    /// Example: cargo run --release -- bench --diagnose --n 3000
     Bench(cmd::bench::Args),
     /// Simulate one of the paper's plants and write its CSV (see `simulate --help`).
     Simulate(cmd::simulate::Args),

@@ -26,6 +26,12 @@ pub struct Args {
     /// dithers, three planted mismatches, lags 1–20). Takes minutes.
     #[arg(long)]
     large: bool,
+    /// Instead of the timings, time one open-loop diagnosis (`diagnose`'s grey-box path) of a
+    /// generated Duffing oscillator of N samples against its least-squares ARX nominal, first
+    /// on one thread, then on every thread, and check that both name the same. Takes a minute
+    /// or two at N = 3000.
+    #[arg(long)]
+    diagnose: bool,
     /// Scale the study's case counts (0.25 for a quick look; the documented run uses 1).
     #[arg(long, default_value_t = 1.0)]
     power_scale: f64,
@@ -48,6 +54,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 rayon::current_num_threads(),
                 r.planted_found,
                 r.false_elements
+            );
+        }
+        return Ok(());
+    }
+    if args.diagnose {
+        eprintln!(
+            "diagnosing a Duffing oscillator, N = {}, seed {}, on one thread, then on {}...",
+            args.n,
+            args.seed,
+            rayon::current_num_threads()
+        );
+        let r = benchmark::run_diagnosis(args.n, args.seed)?;
+        anyhow::ensure!(r.same, "the two runs named differently: the decisions depend on the threads");
+        if args.json {
+            println!("{}", serde_json::to_string(&r)?);
+        } else {
+            println!(
+                "diagnose ({}, N = {}, seed {}, named {}): {:.1} s on one thread, {:.1} s on {} ({:.2}x); the same findings",
+                r.case,
+                r.n,
+                r.seed,
+                r.named,
+                r.one_thread_s,
+                r.all_threads_s,
+                r.threads,
+                r.one_thread_s / r.all_threads_s
             );
         }
         return Ok(());
