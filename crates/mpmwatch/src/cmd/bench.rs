@@ -28,8 +28,8 @@ pub struct Args {
     large: bool,
     /// Instead of the timings, time one open-loop diagnosis (`diagnose`'s grey-box path) of a
     /// generated Duffing oscillator of N samples against its least-squares ARX nominal, first
-    /// on one thread, then on every thread, and check that both name the same. Takes a minute
-    /// or two at N = 3000.
+    /// on one thread, then on every thread, and check that both name the same. Took 27 to
+    /// 37 s in all at N = 3000 on a 2-core machine (docs/performance.md).
     #[arg(long)]
     diagnose: bool,
     /// Scale the study's case counts (0.25 for a quick look; the documented run uses 1).
