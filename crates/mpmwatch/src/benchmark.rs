@@ -268,7 +268,7 @@ pub struct DiagnoseTiming {
 /// `n` samples, against its least-squares ARX nominal (the `diagnose` verb's open-loop path:
 /// every element on every order set, scored by blocked cross-validation).
 pub fn run_diagnosis(n: usize, seed: u64) -> Result<DiagnoseTiming, DiagnoseBenchError> {
-    use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, Physics, diagnose};
+    use mpmwatch_diagnose::{DiagnoseInput, DiagnoseOptions, diagnose};
     use mpmwatch_sim::physical_cases::{PhysicalCase, run};
     let case = PhysicalCase::Duffing;
     let r = run(case, n, seed)?;
@@ -289,10 +289,7 @@ pub fn run_diagnosis(n: usize, seed: u64) -> Result<DiagnoseTiming, DiagnoseBenc
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let (one_thread_s, a) = one.install(timed)?;
     let (all_threads_s, b) = timed()?;
-    let named =
-        a.report.findings.first().map_or("none", |f| {
-            if f.physics == Physics::Unexplained { "unexplained" } else { f.physics.name() }
-        });
+    let named = a.report.findings.first().map_or("none", |f| f.physics.name());
     Ok(DiagnoseTiming {
         case: case.name(),
         n,
