@@ -18,7 +18,11 @@
 //! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose-history.md, stop
 //! 42). A correction that does not settle is withheld, with its time constant. The poles of an
 //! element whose own stores carry the dynamics (a tank cascade) are not read: its slow modes'
-//! levels are set by its own law and its starting levels are fitted ([`settling_time`]).
+//! levels are set by its own law and its starting levels are fitted ([`settling_time`]). Poles
+//! say nothing of a force fed back that holds the output where it stands (a friction on the
+//! output's change sticks it at any level the drive does not beat): a structure with a
+//! feedback element must also forget, within a block, a start one standard deviation away
+//! ([`memory_time`]).
 //!
 //! A named element must also act: an element with a kink (a limit, a dead zone) whose fitted
 //! kink lies where the record hardly goes, on fewer than [`MIN_ACTING`] of the training rows,
@@ -413,6 +417,13 @@ impl Judge<'_> {
             return None;
         }
         let d = self.d;
+        if m.element.feedbacks() > 0 {
+            let memory = memory_time(m, f, d);
+            if memory >= self.block {
+                self.withheld.push(held(Why::Remembers(memory)));
+                return None;
+            }
+        }
         let sim = m.simulate_held(f, &d.u, d.y, d.train.end.saturating_sub(1))?;
         let share = m.acting_share(f, &d.u, &sim, &self.train_rows);
         if let Some(share) = share.filter(|&a| a.is_nan() || a < MIN_ACTING) {
@@ -646,13 +657,16 @@ enum Why {
     Slow(f64),
     /// Its nonlinearity acts on this share of the training rows, under [`MIN_ACTING`].
     Idle(f64),
+    /// Its simulation remembers where it started for this many samples ([`memory_time`]), at
+    /// least a validation block.
+    Remembers(f64),
 }
 
 impl Why {
     /// What record would check a slow correction ([`record_for`]); empty otherwise.
     fn advice(&self, block: f64, n: usize) -> String {
         match *self {
-            Why::Slow(tau) => record_for(tau, block, n),
+            Why::Slow(tau) | Why::Remembers(tau) => record_for(tau, block, n),
             Why::Idle(_) => String::new(),
         }
     }
@@ -669,6 +683,15 @@ impl Why {
                 "the kink it is named for (a limit, a dead zone, a rim) acts on {:.1} % of the training rows (a named one must act on {} %)",
                 100.0 * share,
                 100.0 * MIN_ACTING,
+            ),
+            Why::Remembers(t) => format!(
+                "its simulation, started one standard deviation away, still differs by more than a third of that after {}, longer than the {} samples of a validation block: the force it feeds back holds the output where it stands, and the blocks cannot check the level it carries from one to the next",
+                if t.is_finite() {
+                    format!("{} samples", num(t))
+                } else {
+                    "the whole training part".to_string()
+                },
+                block,
             ),
         }
     }
@@ -761,6 +784,44 @@ fn settling_time(m: &Model<'_>, f: &Fitted) -> f64 {
     if r >= 1.0 { f64::INFINITY } else { -1.0 / r.max(f64::MIN_POSITIVE).ln() }
 }
 
+/// How long (samples) a fitted structure with a feedback element remembers where its
+/// simulation started: over the training rows, started from the recorded output offset by one
+/// training standard deviation either way, the last row at which it still differs from the
+/// simulation from the recorded start by more than `1/e` of that offset, counted from the
+/// first simulated row; +∞ when it still does on the last training row or a start cannot be
+/// simulated. The settling rule's test ([`settling_time`]) reads poles, which say nothing of a
+/// force that holds the output where it stands (a friction on the output's change sticks it
+/// at any level the drive does not beat, an integrator the poles do not show); for a linear
+/// structure the two agree, a difference decaying by `1/e` in one time constant. The held-out
+/// tail is not simulated.
+fn memory_time(m: &Model<'_>, f: &Fitted, d: &Data<'_>) -> f64 {
+    let end = d.train.end.min(d.y.len());
+    let (y, rows) = (&d.y[..end], &d.y[d.train.start.min(end)..end]);
+    let u: Vec<&[f64]> = d.u.iter().map(|x| &x[..end.min(x.len())]).collect();
+    let n = rows.len().max(1) as f64;
+    let mean = rows.iter().sum::<f64>() / n;
+    let sd = (rows.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let first = m.orders.reach().min(end);
+    let Some(base) = m.simulate_held(f, &u, y, end.saturating_sub(1)) else {
+        return f64::INFINITY;
+    };
+    let mut longest = 0.0f64;
+    for offset in [sd, -sd] {
+        let started: Vec<f64> =
+            y.iter().enumerate().map(|(t, &v)| if t < first { v + offset } else { v }).collect();
+        let Some(other) = m.simulate_held(f, &u, &started, end.saturating_sub(1)) else {
+            return f64::INFINITY;
+        };
+        let apart = |t: usize| (other[t] - base[t]).abs() > offset.abs() / std::f64::consts::E;
+        match (first..end).rev().find(|&t| apart(t)) {
+            Some(t) if t + 1 == end => return f64::INFINITY,
+            Some(t) => longest = longest.max((t + 1 - first) as f64),
+            None => {}
+        }
+    }
+    longest
+}
+
 /// Free parameters of an element on the linear orders: the element's own and every
 /// coefficient of its [`Layout`], each input's channel with its poles, the drift term included.
 fn complexity(el: &dyn Element, d: &Data<'_>, i: usize, orders: &Orders) -> usize {
@@ -771,6 +832,7 @@ fn complexity(el: &dyn Element, d: &Data<'_>, i: usize, orders: &Orders) -> usiz
 
 #[cfg(test)]
 mod tests {
+    use super::super::friction::Coulomb;
     use super::*;
     use mpmwatch_core::model::Arx;
 
@@ -939,6 +1001,39 @@ mod tests {
         assert!((cascade - linear).abs() < 1e-6, "{cascade} against {linear}");
         let single = tau(&super::super::draining_tank::DrainingTank, vec![2.0, 0.1, 500.0]);
         assert!((single - 400.0).abs() < 1e-6, "{single}");
+    }
+
+    /// How long a structure remembers its start, on the settling tests' staircase (1500 rows,
+    /// all training), with `α = 0.9`, `β = 0.1`:
+    /// - linear: an offset `δ` in the recorded start is `0.9^(j+1)·δ` on the `j`-th simulated
+    ///   row, above `δ/e` while `j + 1 < −1/ln 0.9 = 9.49`, so the last row apart is `j = 8`
+    ///   and the memory 9 samples, the pole's time constant to within a sample;
+    /// - a friction on the output's change of `γ = −0.3`: the drive from rest,
+    ///   `0.1·(u − x)`, never beats it on inputs within ±1 from a start within ±1, so the
+    ///   output stays where it starts and the memory is infinite, where the settling rule
+    ///   reads 9.49 samples off the pole;
+    /// - a friction on the velocity (`γ = −0.05`, rest at 0): the output returns to rest and
+    ///   sticks there from any start, so it forgets; it does within twice the linear part's
+    ///   time constant.
+    #[test]
+    fn a_force_that_holds_the_output_where_it_starts_is_remembered() {
+        let u = staircase();
+        let y: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
+        let d = Data { u: vec![&u], y: &y, train: 0..u.len(), nominal: None, noise_order: 0 };
+        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
+        let memory = |element: &dyn Element, p: Vec<f64>, theta: Vec<f64>| {
+            let m = Model { element, input: 0, orders: orders.clone() };
+            memory_time(&m, &Fitted { p, theta, noise: vec![] }, &d)
+        };
+        assert_eq!(memory(&Linear, vec![], vec![0.9, 0.1, 0.0]), 9.0);
+        let position = Coulomb { on_change: true };
+        let held = memory(&position, vec![], vec![0.9, 0.1, -0.3, 0.0]);
+        assert_eq!(held, f64::INFINITY);
+        let poles = Model { element: &position, input: 0, orders: orders.clone() };
+        let fitted = Fitted { p: vec![], theta: vec![0.9, 0.1, -0.3, 0.0], noise: vec![] };
+        assert!(settling_time(&poles, &fitted) < 10.0);
+        let velocity = memory(&Coulomb { on_change: false }, vec![0.0], vec![0.9, 0.1, -0.05, 0.0]);
+        assert!(velocity <= 2.0 * -1.0 / 0.9f64.ln(), "{velocity}");
     }
 
     /// A known limit of the drift test, pinned down. The plant of the settling test with pole
