@@ -675,8 +675,12 @@ impl Why {
     fn text(&self, block: f64) -> String {
         match *self {
             Why::Slow(tau) => format!(
-                "its slowest time constant, {} samples, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next",
-                if tau.is_finite() { num(tau) } else { "infinite (an integrator or unstable)".to_string() },
+                "its slowest time constant, {}, is longer than the {} samples of a validation block: the blocks cannot check the level it carries from one to the next",
+                if tau.is_finite() {
+                    format!("{} samples", num(tau))
+                } else {
+                    "infinite (an integrator or unstable)".to_string()
+                },
                 block,
             ),
             Why::Idle(share) => format!(
