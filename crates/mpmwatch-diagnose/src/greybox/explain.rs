@@ -1037,7 +1037,7 @@ mod tests {
         let fitted = Fitted { p: vec![], theta: vec![0.9, 0.1, -0.3, 0.0], noise: vec![] };
         assert!(settling_time(&poles, &fitted) < 10.0);
         let velocity = memory(&Coulomb { on_change: false }, vec![0.0], vec![0.9, 0.1, -0.05, 0.0]);
-        assert!(velocity <= 2.0 * -1.0 / 0.9f64.ln(), "{velocity}");
+        assert!(velocity <= -2.0 / 0.9f64.ln(), "{velocity}");
     }
 
     /// A known limit of the drift test, pinned down. The plant of the settling test with pole
