@@ -121,7 +121,9 @@ pub trait Element: Sync {
     /// corrected model settles only as fast as its slowest pole, the element's included
     /// ([`Model::slowest_pole`]). Empty by default: a static map has none, nor has a memory
     /// without a decaying mode (backlash). A feedback element (cubic stiffness) moves the
-    /// linear part's poles with the operating point instead, which is not read here.
+    /// linear part's poles with the operating point instead, which is not read here; how long
+    /// a structure with one remembers where it started is simulated instead (`memory_time` in
+    /// explain.rs).
     fn poles(&self, _p: &[f64]) -> Vec<f64> {
         Vec::new()
     }
