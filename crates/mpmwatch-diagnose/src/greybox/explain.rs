@@ -1022,7 +1022,7 @@ mod tests {
     ///   on the staircase's first level, −1, held 37 rows: the friction's fixed point there,
     ///   `x = 0.9x − 0.1 + 0.05`, is −0.5, and both offset starts (±σ, σ ≈ 0.3) stay below
     ///   rest over that level, where the friction only adds a constant, so the difference
-    ///   decays by 0.9 a sample as the linear structure's (to 2 % of σ by the level's end,
+    ///   decays by 0.9 a sample as the linear structure's (to about 2 % of σ by the level's end,
     ///   before any crossing of rest) and the memory is again 9: a friction that is not
     ///   holding the output is not read as memory.
     #[test]
