@@ -72,6 +72,7 @@
 //! scale; the gate against the nominal stays the FIT's.
 
 use crate::describe::num;
+use mpmwatch_core::numerics::std_dev;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
@@ -806,9 +807,7 @@ fn memory_time(m: &Model<'_>, f: &Fitted, d: &Data<'_>) -> Option<f64> {
     let end = d.train.end.min(d.y.len());
     let (y, rows) = (&d.y[..end], &d.y[d.train.start.min(end)..end]);
     let u: Vec<&[f64]> = d.u.iter().map(|x| &x[..end.min(x.len())]).collect();
-    let n = rows.len().max(1) as f64;
-    let mean = rows.iter().sum::<f64>() / n;
-    let sd = (rows.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let sd = std_dev(rows, 0);
     let first = m.orders.reach().min(end);
     let base = m.simulate_held(f, &u, y, end.saturating_sub(1))?;
     let mut longest = 0.0f64;
