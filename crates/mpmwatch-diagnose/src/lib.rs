@@ -60,7 +60,7 @@ use std::collections::BTreeMap;
 pub use candidates::{ActsOn, Physics};
 pub use error::DiagnoseError;
 pub use fitness::fit_pct;
-pub use greybox::{ElementCurve, FittedGreyBox, GreyBox, Reading, Structure, pinned};
+pub use greybox::{ElementCurve, FittedGreyBox, GreyBox, MIN_ACTING, Reading, Structure, pinned};
 pub use input::{DiagnoseInput, DiagnoseOptions};
 pub use minimize::{minimize, minimize_from};
 pub use mpmwatch_core::detect::Method;

@@ -114,6 +114,12 @@ pub struct PhysicalRecord {
     pub description: String,
     /// Share of the noise in the recorded output's variance.
     pub noise_share: f64,
+    /// Where the plant's kink acts, per sample, for the classes with one (the tank at its rim,
+    /// the sensor clipping, the input inside the dead zone, the mass stuck); `None` for the
+    /// smooth nonlinearities, the delay and the linear plant. A study reads it to tell a miss
+    /// the record could not show (the kink never reached on the training rows) from one it
+    /// could.
+    pub acting: Option<Vec<bool>>,
 }
 
 /// The nominal's structure: `A(q)y = B(q)u(t − 1) + c` with two poles and two numerator
@@ -246,6 +252,7 @@ pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Resu
         return Err(SimError::parameter("physical case length", n, "at least 500 samples"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (case as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut acting = None;
     let (u, x, description) = match case {
         PhysicalCase::Linear => {
             let (omega, zeta) = (uniform(&mut rng, 0.05, 0.4), uniform(&mut rng, 0.3, 1.5));
@@ -295,6 +302,7 @@ pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Resu
                     out
                 })
                 .collect();
+            acting = Some(x.iter().map(|&v| v == 0.0).collect());
             (u, x, format!("pole {a:.3}, Coulomb force {:.2} of the input amplitude", fc / amp))
         }
         PhysicalCase::HeaterVoltage => {
@@ -318,6 +326,7 @@ pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Resu
             sorted.sort_by(f64::total_cmp);
             let q = uniform(&mut rng, 0.6, 0.85);
             let hi = sorted[(q * (n - 1) as f64) as usize];
+            acting = Some(x.iter().map(|&v| v >= hi).collect());
             (
                 u,
                 x.iter().map(|v| v.min(hi)).collect(),
@@ -360,12 +369,13 @@ pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Resu
             sorted.sort_by(f64::total_cmp);
             let q = uniform(&mut rng, 0.7, 0.9);
             let rim = sorted[(q * (n - 1) as f64) as usize];
-            let (x, _) = run_tanks(rim);
+            let (x, upper) = run_tanks(rim);
+            acting = Some(upper.iter().map(|&h| h >= rim).collect());
             (
                 u,
                 x,
                 format!(
-                    "outflows {k1:.3}, {k2:.3}, pump {pump:.3}, rim at the upper level's {:.0} % quantile",
+                    "outflows {k1:.4}, {k2:.4}, pump {pump:.4}, rim at the upper level's {:.0} % quantile ({rim:.3})",
                     100.0 * q
                 ),
             )
@@ -376,6 +386,7 @@ pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Resu
             let u = input(&mut rng, n, -1.0, 1.0, (hold, 4 * hold), signal);
             let w = uniform(&mut rng, 0.1, 0.45);
             let dz: Vec<f64> = u.iter().map(|v| v.signum() * (v.abs() - w).max(0.0)).collect();
+            acting = Some(u.iter().map(|v| v.abs() <= w).collect());
             let (x, _) = oscillator(&dz, omega, zeta, 8, |_, _| 0.0);
             (u, x, format!("ω {omega:.3}, ζ {zeta:.2}, dead zone ±{w:.2} of a ±1 input"))
         }
@@ -418,6 +429,7 @@ pub fn run_with(case: PhysicalCase, n: usize, seed: u64, signal: Signal) -> Resu
             100.0 * share
         ),
         noise_share: share,
+        acting,
     })
 }
 

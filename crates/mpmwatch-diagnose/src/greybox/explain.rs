@@ -1048,6 +1048,35 @@ mod tests {
         assert_eq!(velocity, Some(9.0));
     }
 
+    /// A cubic spring, `x(t) = 0.9·x(t−1) + 0.1·u(t−1) + γ·x(t−1)³`, on the same staircase: two
+    /// simulations apart by `δ` close by `0.9 + 3γξ²` a sample, `ξ` between them (the mean
+    /// value theorem). The record starts at −0.5 on the first level, −1, held 37 rows; from
+    /// −0.5 ± σ (σ ≈ 0.29) both simulations move toward the level's fixed point (about −0.7
+    /// for `γ = −0.05`, −1.03 for `γ = +0.02`) and stay beyond −0.2 and within ±1.1, so:
+    /// - a stiffening spring (`γ = −0.05`) closes by at most `0.9 − 0.15·0.2² = 0.894` a
+    ///   sample, and `0.894⁹ = 0.365 < 1/e`: it forgets within 8 samples, before the linear
+    ///   structure's 9;
+    /// - a softening spring (`γ = +0.02`) closes by at least 0.9 and at most
+    ///   `0.9 + 0.06·1.1² = 0.973` a sample: it remembers at least the linear structure's 9
+    ///   samples, and forgets within the level (`0.973³⁷ < 1/e`).
+    #[test]
+    fn a_spring_forgets_as_fast_as_its_cube_pulls_back() {
+        let u = staircase();
+        let y: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
+        let d = Data { u: vec![&u], y: &y, train: 0..u.len(), nominal: None, noise_order: 0 };
+        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
+        let memory = |gamma: f64| {
+            let m =
+                Model { element: &super::super::stiffness::CubicStiffness, input: 0, orders: orders.clone() };
+            memory_time(&m, &Fitted { p: vec![0.0], theta: vec![0.9, 0.1, gamma, 0.0], noise: vec![] }, &d)
+                .expect("the recorded start simulates")
+        };
+        let stiff = memory(-0.05);
+        assert!((1.0..=8.0).contains(&stiff), "{stiff}");
+        let soft = memory(0.02);
+        assert!((9.0..=37.0).contains(&soft), "{soft}");
+    }
+
     /// A known limit of the drift test, pinned down. The plant of the settling test with pole
     /// 0.95 read with a ramp of 0.3 over its 1500 rows, noise-free: a re-fit with two poles
     /// holds the ramp exactly as a pole at 1 fed by its constant beside the pole at 0.95, so a

@@ -2,8 +2,13 @@
 //! the nominal is an ARX model fitted by least squares on the record, the input is its own
 //! excitation. The study (ignored; `SEEDS=a..b N=3000 cargo test -p mpmwatch-diagnose --test it
 //! physical_study::study -- --ignored --exact --nocapture`; `CASE=name` for one class, `VERBOSE=1`
-//! for the findings and ranges, `DUMP=dir` for a CSV per case of input, output, nominal and
-//! corrected simulation) prints one line per case and the rates.
+//! for the findings and ranges, `DUMP=dir` for a CSV per case of input, output, nominal,
+//! corrected simulation and noise-free plant) prints one line per case and the rates. For a
+//! class with a kink (the tank's rim, the clipping sensor, the dead zone, the sticking mass)
+//! each line gives the share of the training rows the generator's kink acts on, and the rates
+//! are split by whether it acts on at least [`MIN_ACTING`] of them, the share a named kink must
+//! act on: below it the record cannot show the physics before the held-out tail (`kink_study`
+//! prints the shares alone, without diagnosing).
 //!
 //! Two shifts away from the generator the method was developed against, for checking that a
 //! result holds beyond it: `NOMINAL=na,nb,nk`, the user's nominal an ARX of other orders (a
@@ -53,7 +58,9 @@
 
 use mpmwatch_core::detect::Signal;
 use mpmwatch_core::numerics::{mean, std_dev};
-use mpmwatch_diagnose::{ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, Physics, diagnose, fit_pct};
+use mpmwatch_diagnose::{
+    ActsOn, DiagnoseInput, DiagnoseOptions, Diagnosis, MIN_ACTING, Physics, diagnose, fit_pct,
+};
 use mpmwatch_sim::physical_cases::{
     PhysicalCase, PhysicalRecord, Signal as Experiment, nominal_simulation_on, run_with,
 };
@@ -158,6 +165,9 @@ fn delayed(mut r: PhysicalRecord, d: usize) -> PhysicalRecord {
     r.u.drain(..d);
     r.y.truncate(n);
     r.plant.truncate(n);
+    if let Some(a) = r.acting.as_mut() {
+        a.truncate(n);
+    }
     r.description += &format!("; a transport delay of {d} samples added");
     r
 }
@@ -400,6 +410,9 @@ fn commissioned(
     r.u.drain(..n);
     r.y.drain(..n);
     r.plant.drain(..n);
+    if let Some(a) = r.acting.as_mut() {
+        a.drain(..n);
+    }
     if let Some(u2) = u2.as_mut() {
         u2.drain(..n);
     }
@@ -413,6 +426,8 @@ fn study() {
     let (a, b, n) = seeds_and_length(3000);
     let only = std::env::var("CASE").ok();
     let (mut right, mut total, mut worse) = (0, 0, 0);
+    // Right and total among the cases with a kink, split by whether it acts on the training rows.
+    let (mut shown, mut hidden) = ((0, 0), (0, 0));
     for case in PhysicalCase::ALL {
         if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str()))
             || (sensor().is_some() && case != PhysicalCase::Linear)
@@ -478,8 +493,14 @@ fn study() {
             // right finding can show (a fitted model may beat it on the tail by chance).
             let tail = d.report.holdout.start_index..r.y.len();
             let truth = fit_pct(&r.y[tail.clone()], &r.plant[tail]);
+            let kink = kink_share(&r, d.report.holdout.start_index);
+            if let Some(share) = kink {
+                let split = if share >= MIN_ACTING { &mut shown } else { &mut hidden };
+                split.0 += usize::from(ok);
+                split.1 += 1;
+            }
             eprintln!(
-                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} (the true plant {:6.1}) | {} | tried {:?} | beyond {:?}",
+                "{:<18} seed {seed:>3} {:<3} named {:<16} held-out {:6.1} → {:6.1}{} (the true plant {:6.1}{}) | {} | tried {:?} | beyond {:?}",
                 case.name(),
                 if ok { "ok" } else { "NO" },
                 match (o.on_output, u2.is_some() && !o.input.is_empty()) {
@@ -492,14 +513,19 @@ fn study() {
                 o.after,
                 if fell { " FELL" } else { "" },
                 truth,
+                kink.map_or(String::new(), |a| format!(
+                    ", its kink on {:.1} % of the training rows",
+                    100.0 * a
+                )),
                 r.description,
                 best,
                 beyond
             );
             if let Ok(dir) = std::env::var("DUMP") {
-                let mut out = String::from("u,y,s,c\n");
+                let mut out = String::from("u,y,s,c,plant\n");
                 for t in 0..r.y.len() {
-                    out += &format!("{},{},{},{}\n", r.u[t], r.y[t], r.s[t], d.corrected[0][t]);
+                    out +=
+                        &format!("{},{},{},{},{}\n", r.u[t], r.y[t], r.s[t], d.corrected[0][t], r.plant[t]);
                 }
                 std::fs::write(format!("{dir}/{}_{seed}.csv", case.name()), out).unwrap();
             }
@@ -525,6 +551,60 @@ fn study() {
         eprintln!("== {}: {case_right}/{}", case.name(), b - a);
     }
     eprintln!("right {right}/{total}; findings whose held-out FIT fell: {worse}");
+    eprintln!(
+        "of the cases with a kink: right {}/{} where it acts on at least {} % of the training rows, {}/{} where it does not",
+        shown.0,
+        shown.1,
+        100.0 * MIN_ACTING,
+        hidden.0,
+        hidden.1
+    );
+}
+
+/// The share of the training rows (those before `cut`) on which the plant's kink acts, as the
+/// generator knows it ([`PhysicalRecord::acting`]); `None` for a plant without one.
+fn kink_share(r: &PhysicalRecord, cut: usize) -> Option<f64> {
+    let a = &r.acting.as_ref()?[..cut];
+    Some(a.iter().filter(|&&x| x).count() as f64 / a.len().max(1) as f64)
+}
+
+/// Without diagnosing: per class with a kink, the share of the first 70 % of each record (the
+/// default training part) on which the generator's kink acts, and how many records keep it under
+/// [`MIN_ACTING`], the share a named kink must act on. A record whose kink stays under it cannot
+/// show its physics on the training rows. Ignored; `SEEDS=a..b [CASE=name] cargo test --release
+/// -p mpmwatch-diagnose --test it physical_study::kink_study -- --ignored --exact --nocapture`.
+#[test]
+#[ignore]
+fn kink_study() {
+    let (a, b, n) = seeds_and_length(3000);
+    let only = std::env::var("CASE").ok();
+    for case in PhysicalCase::ALL {
+        if only.as_ref().is_some_and(|o| !case.name().contains(o.as_str())) {
+            continue;
+        }
+        let mut idle = Vec::new();
+        for seed in a..b {
+            let r = run_with(case, n, seed, signal()).unwrap();
+            let cut = (0.7 * n as f64).round() as usize;
+            let Some(share) = kink_share(&r, cut) else { break };
+            eprintln!(
+                "{:<18} seed {seed:>4} kink on {:5.1} % of the training rows | {}",
+                case.name(),
+                100.0 * share,
+                r.description
+            );
+            if share < MIN_ACTING {
+                idle.push(seed);
+            }
+        }
+        eprintln!(
+            "== {}: under {} % on {} of {}: {idle:?}",
+            case.name(),
+            100.0 * MIN_ACTING,
+            idle.len(),
+            b - a
+        );
+    }
 }
 
 /// The no-change cases at scale: every class's plant diagnosed against an exact model of

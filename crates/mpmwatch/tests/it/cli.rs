@@ -123,6 +123,21 @@ fn bench_json_has_the_contract_keys() {
     assert_eq!(out["n"], 512);
 }
 
+/// What `bench --diagnose` times and checks: one open-loop diagnosis of the Duffing oscillator on
+/// one thread, then on every thread of the pool, with the same report both times (the verb
+/// fails when they differ). A short record: the check is the plumbing and the agreement, not
+/// the time.
+#[test]
+fn bench_diagnose_runs_one_thread_then_all_and_finds_the_same() {
+    let r = mpmwatch::benchmark::run_diagnosis(600, 2).expect("a diagnosis of a generated record");
+    assert_eq!((r.case, r.n, r.seed), ("duffing", 600, 2));
+    assert!(r.same, "one thread and {} named differently", r.threads);
+    assert!(r.threads >= 1);
+    assert!(r.one_thread_s > 0.0 && r.all_threads_s > 0.0, "{} {}", r.one_thread_s, r.all_threads_s);
+    let names: Vec<&str> = mpmwatch_diagnose::Physics::ALL.iter().map(|p| p.name()).collect();
+    assert!(r.named == "none" || r.named == "unexplained" || names.contains(&r.named), "{}", r.named);
+}
+
 #[test]
 fn analyze_prints_json_verdicts_and_writes_figures() {
     let scratch = scratch_dir("analyze");
