@@ -111,12 +111,6 @@ pub trait Element: Sync {
     /// Starting values of the element's own parameters (empty vector: it has none), acting on
     /// input `i`.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>>;
-    /// The starts a fit on `rows` refines ([`fit`]): [`Element::starts`] by default. An element
-    /// whose parameters are cheap to simulate and hard to start may screen a grid of them on
-    /// the fit rows alone instead, so that a fold's validation block never picks its start.
-    fn starts_on(&self, d: &Data<'_>, i: usize, _rows: &[usize]) -> Vec<Vec<f64>> {
-        self.starts(d, i)
-    }
     /// How many leading parameters of every start are set from the training rows and kept as
     /// they are by the fit (a polynomial's centre, scale and range): not free, so not counted
     /// in the element's complexity either. 0 by default.
@@ -638,7 +632,7 @@ impl Model<'_> {
 /// refined by its prediction error ([`noise::prediction_error_fit`]). `None` when no start gives a
 /// stable simulation.
 pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
-    let mut starts = model.element.starts_on(d, model.input, rows);
+    let mut starts = model.element.starts(d, model.input);
     if starts.is_empty() {
         starts.push(Vec::new());
     }

@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 
 use mpmwatch_core::numerics::{least_squares_rows, quantile};
 
-use super::draining_tank::{SUBSTEPS, is_inflow, k_for};
+use super::draining_tank::{SUBSTEPS, TAUS, is_inflow, k_for};
 use super::{Data, Element, map_input};
 use crate::candidates::{ActsOn, Physics};
 
@@ -86,14 +86,6 @@ fn starting_inflow(d: &Data<'_>, i: usize, tanks: [f64; 4]) -> f64 {
     (mean * ((y0 - c[1]) / c[0]).max(0.0)).sqrt().clamp(lo, hi)
 }
 
-/// Time constants (samples) at the mean inflow screened for each tank ([`TankCascade`]'s
-/// `starts_on`): doubling from a few samples to most of a 3000-sample record's training part.
-const GRID: [f64; 9] = [5.0, 12.5, 25.0, 50.0, 100.0, 200.0, 400.0, 800.0, 1600.0];
-
-/// Starts refined per fit: as many as before the screen (four equal time constants, two rims),
-/// so a fit costs as many refinements as it did.
-const STARTS: usize = 8;
-
 /// Outputs averaged for the level the record starts at: a few, so that noise on one row does
 /// not set it, and few enough that even a fast tank has hardly moved.
 const STARTING_ROWS: usize = 5;
@@ -108,41 +100,23 @@ impl Element for TankCascade {
     fn identifiable(&self, d: &Data<'_>, i: usize) -> bool {
         is_inflow(d, i)
     }
-    /// The screen ([`Element::starts_on`]) on every training row.
+    /// Per time constant of the single tank's [`TAUS`] (both tanks alike), a rim at the
+    /// unbounded upper tank's 80th and 90th training percentiles of level, and the starting
+    /// inflow [`starting_inflow`] reads for them.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>> {
-        let rows: Vec<usize> = d.train.clone().collect();
-        self.starts_on(d, i, &rows)
-    }
-    /// The [`STARTS`] best of a grid screened on the fit rows: both tanks' time constants at the
-    /// mean inflow over [`GRID`] each, a rim at the unbounded upper tank's 70th, 80th and 90th
-    /// training percentiles of level, and the starting inflow [`starting_inflow`] reads for
-    /// them, ranked by the least-squares error of the signal and a constant against the output
-    /// on `rows`. The generated tanks' time constants run from about 90 to 2200 samples, often
-    /// unequal, and a fit started from equal tanks at a few time constants did not reach them
-    /// (docs/diagnose-history.md, stop 66).
-    fn starts_on(&self, d: &Data<'_>, i: usize, rows: &[usize]) -> Vec<Vec<f64>> {
         let train = &d.u[i][d.train.clone()];
         let mean = train.iter().sum::<f64>() / train.len().max(1) as f64;
-        let ones = vec![1.0; d.y.len()];
-        let mut scored: Vec<(f64, Vec<f64>)> = Vec::new();
-        for t1 in GRID {
-            for t2 in GRID {
-                let (k1, k2) = (k_for(mean, t1), k_for(mean, t2));
-                let h1: Vec<f64> = levels(d.u[i], k1, f64::INFINITY, k2, mean).iter().map(|h| h.0).collect();
-                for q in [0.7, 0.8, 0.9] {
-                    let rim = quantile(&h1[d.train.clone()], q);
-                    let u0 = starting_inflow(d, i, [mean, k1, rim, k2]);
-                    let x = signal(d.u[i], [mean, k1, rim, k2], u0);
-                    let Some(c) = least_squares_rows(&[&x, &ones], d.y, rows) else { continue };
-                    let sse: f64 = rows.iter().map(|&t| (d.y[t] - c[0] * x[t] - c[1]).powi(2)).sum();
-                    if sse.is_finite() {
-                        scored.push((sse, vec![mean, u0, k1, rim, k2]));
-                    }
-                }
+        let mut out = Vec::new();
+        for tau in TAUS {
+            let k = k_for(mean, tau);
+            let h1: Vec<f64> = levels(d.u[i], k, f64::INFINITY, k, mean).iter().map(|h| h.0).collect();
+            for q in [0.8, 0.9] {
+                let rim = quantile(&h1[d.train.clone()], q);
+                let u0 = starting_inflow(d, i, [mean, k, rim, k]);
+                out.push(vec![mean, u0, k, rim, k]);
             }
         }
-        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-        scored.into_iter().take(STARTS).map(|s| s.1).collect()
+        out
     }
     fn fixed(&self) -> usize {
         1
@@ -223,31 +197,6 @@ mod tests {
         );
         assert_eq!(TankCascade.map_at(&p, &[], 0.5), Some(cap * cap / mean));
         assert_eq!(TankCascade.map_at(&p, &[], 0.3), Some(0.09 / mean));
-    }
-
-    /// The screen ranks first the grid point a record was made at: a noise-free cascade whose
-    /// tanks' time constants at the mean inflow are two of [`GRID`]'s, 50 and 800 samples, whose
-    /// rim is the unbounded upper tank's 80th training percentile (a screened rim), started
-    /// settled at the mean inflow and read through `y = 2·s + 1`. At that point the screened
-    /// signal is the record's own but for the starting inflow, which [`starting_inflow`] reads
-    /// off the first five outputs: the output is the 800-sample tank's level, whose inflow (the
-    /// 50-sample tank's outflow) has only begun to fall, so in five rows it moves by about
-    /// `½·5²/(50·800)` of the step, a few ten-thousandths, and the reading is the truth to 1e-3.
-    /// Its error is then the grid's least; every other point has other dynamics or another rim.
-    #[test]
-    fn the_screen_ranks_first_the_grid_point_of_unequal_tanks() {
-        let u: Vec<f64> = (0..3000).map(|t| 1.0 + ((t / 40 * 7919) % 10) as f64).collect();
-        let mean = u.iter().sum::<f64>() / u.len() as f64;
-        let (k1, k2) = (k_for(mean, 50.0), k_for(mean, 800.0));
-        let upper: Vec<f64> = levels(&u, k1, f64::INFINITY, k2, mean).iter().map(|h| h.0).collect();
-        let rim = quantile(&upper, 0.8);
-        let y: Vec<f64> = signal(&u, [mean, k1, rim, k2], mean).iter().map(|v| 2.0 * v + 1.0).collect();
-        let d = Data { u: vec![&u], y: &y, train: 0..3000, nominal: None, noise_order: 0 };
-        let rows: Vec<usize> = (0..3000).collect();
-        let screened = TankCascade.starts_on(&d, 0, &rows);
-        assert_eq!(screened.len(), STARTS);
-        assert_eq!(&screened[0][2..], &[k1, rim, k2], "{:?}", screened[0]);
-        assert!((screened[0][1] - mean).abs() < 1e-3 * mean, "starting inflow {}", screened[0][1]);
     }
 
     /// A noise-free cascade (orifices 0.3 and 0.25, the upper tank overflowing at level 9,
