@@ -1008,6 +1008,17 @@ mod tests {
         assert!((single - 400.0).abs() < 1e-6, "{single}");
     }
 
+    /// [`memory_time`] of `element` with parameters `p` and first-order linear part `theta`
+    /// (`na = nb = nk = 1`), all training, on the settling tests' staircase read as `y = 0.5·u`.
+    fn memory_on_the_staircase(element: &dyn Element, p: Vec<f64>, theta: Vec<f64>) -> Option<f64> {
+        let u = staircase();
+        let y: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
+        let d = Data { u: vec![&u], y: &y, train: 0..u.len(), nominal: None, noise_order: 0 };
+        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
+        let m = Model { element, input: 0, orders };
+        memory_time(&m, &Fitted { p, theta, noise: vec![] }, &d)
+    }
+
     /// How long a structure remembers its start, on the settling tests' staircase (1500 rows,
     /// all training), with `α = 0.9`, `β = 0.1`:
     /// - linear: an offset `δ` in the recorded start is `0.9^(j+1)·δ` on the `j`-th simulated
@@ -1028,17 +1039,13 @@ mod tests {
     fn a_force_that_holds_the_output_where_it_starts_is_remembered() {
         let u = staircase();
         let y: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
-        let d = Data { u: vec![&u], y: &y, train: 0..u.len(), nominal: None, noise_order: 0 };
         let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
-        let memory = |element: &dyn Element, p: Vec<f64>, theta: Vec<f64>| {
-            let m = Model { element, input: 0, orders: orders.clone() };
-            memory_time(&m, &Fitted { p, theta, noise: vec![] }, &d)
-        };
+        let memory = memory_on_the_staircase;
         assert_eq!(memory(&Linear, vec![], vec![0.9, 0.1, 0.0]), Some(9.0));
         let position = Coulomb { on_change: true };
         let held = memory(&position, vec![], vec![0.9, 0.1, -0.3, 0.0]);
         assert_eq!(held, Some(f64::INFINITY));
-        let poles = Model { element: &position, input: 0, orders: orders.clone() };
+        let poles = Model { element: &position, input: 0, orders };
         let fitted = Fitted { p: vec![], theta: vec![0.9, 0.1, -0.3, 0.0], noise: vec![] };
         // Infinite because it holds, not because it could not be simulated: it stays at its start.
         let sim = poles.simulate(&fitted, &[&u], &y).expect("it simulates");
@@ -1061,14 +1068,9 @@ mod tests {
     ///   samples, and forgets within the level (`0.973³⁷ < 1/e`).
     #[test]
     fn a_spring_forgets_as_fast_as_its_cube_pulls_back() {
-        let u = staircase();
-        let y: Vec<f64> = u.iter().map(|v| 0.5 * v).collect();
-        let d = Data { u: vec![&u], y: &y, train: 0..u.len(), nominal: None, noise_order: 0 };
-        let orders = Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None };
         let memory = |gamma: f64| {
-            let m =
-                Model { element: &super::super::stiffness::CubicStiffness, input: 0, orders: orders.clone() };
-            memory_time(&m, &Fitted { p: vec![0.0], theta: vec![0.9, 0.1, gamma, 0.0], noise: vec![] }, &d)
+            let spring = super::super::stiffness::CubicStiffness;
+            memory_on_the_staircase(&spring, vec![0.0], vec![0.9, 0.1, gamma, 0.0])
                 .expect("the recorded start simulates")
         };
         let stiff = memory(-0.05);
