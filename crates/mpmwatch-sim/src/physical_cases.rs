@@ -114,11 +114,11 @@ pub struct PhysicalRecord {
     pub description: String,
     /// Share of the noise in the recorded output's variance.
     pub noise_share: f64,
-    /// Where the plant's kink acts, per sample, for the classes with one (the tank at its rim,
-    /// the sensor clipping, the input inside the dead zone, the mass stuck); `None` for the
-    /// smooth nonlinearities, the delay and the linear plant. A study reads it to tell a miss
-    /// the record could not show (the kink never reached on the training rows) from one it
-    /// could.
+    /// Where the plant's kink acts, per sample of the plant's own time (the rows of `plant`),
+    /// for the classes with one (the tank at its rim, the sensor clipping, the input the plant
+    /// receives inside the dead zone, the mass stuck); `None` for the smooth nonlinearities,
+    /// the delay and the linear plant. A study reads it to tell a miss the record could not
+    /// show (the kink never reached on the training rows) from one it could.
     pub acting: Option<Vec<bool>>,
 }
 

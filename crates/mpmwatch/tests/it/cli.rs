@@ -123,19 +123,27 @@ fn bench_json_has_the_contract_keys() {
     assert_eq!(out["n"], 512);
 }
 
-/// What `bench --diagnose` times and checks: one open-loop diagnosis of the Duffing oscillator on
-/// one thread, then on every thread of the pool, with the same report both times (the verb
-/// fails when they differ). A short record: the check is the plumbing and the agreement, not
-/// the time.
+/// What `bench --diagnose` times and checks, run as a user runs it: one open-loop diagnosis of
+/// the Duffing oscillator on one thread, then on every thread of the pool, with the same report
+/// both times (the verb exits non-zero when they differ, so a success with `same` false would be
+/// a broken check). A short record: the check is the plumbing and the agreement, not the time.
 #[test]
 fn bench_diagnose_runs_one_thread_then_all_and_finds_the_same() {
-    let r = mpmwatch::benchmark::run_diagnosis(600, 2).expect("a diagnosis of a generated record");
-    assert_eq!((r.case, r.n, r.seed), ("duffing", 600, 2));
-    assert!(r.same, "one thread and {} named differently", r.threads);
-    assert!(r.threads >= 1);
-    assert!(r.one_thread_s > 0.0 && r.all_threads_s > 0.0, "{} {}", r.one_thread_s, r.all_threads_s);
+    let out = json_of(
+        &bin().args(["bench", "--diagnose", "--n", "600", "--seed", "2", "--json"]).output().unwrap(),
+    );
+    assert_eq!(
+        (out["case"].as_str(), out["n"].as_u64(), out["seed"].as_u64()),
+        (Some("duffing"), Some(600), Some(2))
+    );
+    assert_eq!(out["same"], true, "{out}");
+    assert!(out["threads"].as_u64().is_some_and(|t| t >= 1), "{out}");
+    for key in ["one_thread_s", "all_threads_s"] {
+        assert!(out[key].as_f64().is_some_and(|s| s > 0.0 && s.is_finite()), "{key}: {out}");
+    }
     let names: Vec<&str> = mpmwatch_diagnose::Physics::ALL.iter().map(|p| p.name()).collect();
-    assert!(r.named == "none" || r.named == "unexplained" || names.contains(&r.named), "{}", r.named);
+    let named = out["named"].as_str().unwrap_or_default();
+    assert!(named == "none" || named == "unexplained" || names.contains(&named), "{named}");
 }
 
 #[test]
