@@ -165,8 +165,9 @@ fn delayed(mut r: PhysicalRecord, d: usize) -> PhysicalRecord {
     r.u.drain(..d);
     r.y.truncate(n);
     r.plant.truncate(n);
-    // The kink's mask is in the plant's time, as the output's rows are (the dead zone's marks
-    // the input the plant received at that row, now `d` rows earlier in `u`): it is cut with them.
+    // The kink's mask is in the plant's time, as the output's rows are (the dead zone's mask
+    // marks the input the plant received at that row, now `d` rows earlier in `u`): it is cut
+    // with them.
     if let Some(a) = r.acting.as_mut() {
         a.truncate(n);
     }
