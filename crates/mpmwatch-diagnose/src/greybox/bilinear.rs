@@ -15,9 +15,9 @@ use crate::candidates::{ActsOn, Physics};
 /// Largest correlation of the product with the square at which the product is still told apart.
 const IDENTIFIABLE_BELOW: f64 = 0.9;
 
-/// The inputs and `z(t)·z(t−1)`, `z` the input standardised about its training mean and held at
-/// its training range's edges as the polynomial's powers are (same parameters, kept by the
-/// fit). Linear in its coefficients.
+/// The inputs and `z(t)·z(t−1)`, `z` the input standardised about its mean on the rows fitted
+/// and held at their range's edges (the polynomial's parameters, kept by the fit): the product
+/// of two held samples, not a power with a tangent. Linear in its coefficients.
 pub struct Bilinear;
 
 impl Element for Bilinear {
@@ -32,6 +32,9 @@ impl Element for Bilinear {
     }
     fn fixed(&self) -> usize {
         4
+    }
+    fn fixed_on(&self, d: &Data<'_>, i: usize, rows: &[usize]) -> Option<Vec<f64>> {
+        Some(polynomial::centring_on(d.u[i], rows))
     }
     /// Only where the product carries a fifth of its variance beyond the square: correlation
     /// below 0.9 between `z(t)·z(t−1)` and `z(t)²` on the training rows (1 − 0.9² = 0.19). On a

@@ -111,11 +111,20 @@ pub trait Element: Sync {
     /// Starting values of the element's own parameters (empty vector: it has none), acting on
     /// input `i`.
     fn starts(&self, d: &Data<'_>, i: usize) -> Vec<Vec<f64>>;
-    /// How many leading parameters of every start are set from the training rows and kept as
-    /// they are by the fit (a polynomial's centre, scale and range): not free, so not counted
-    /// in the element's complexity either. 0 by default.
+    /// How many leading parameters of every start are set from the data, not searched, and kept
+    /// as they are by the fit (a polynomial's centre, scale and range, read off the rows fitted
+    /// by [`Element::fixed_on`]): not free, so not counted in the element's complexity either.
+    /// 0 by default.
     fn fixed(&self) -> usize {
         0
+    }
+    /// The fixed leading parameters of a fit on `rows` of input `i`, for an element that reads
+    /// them off the rows it is fitted on (a map's centre, scale and range); `None` keeps the
+    /// starts'. A map is not known beyond the range its fit rows visit: fitted on a fold, its
+    /// validation block then scores what it does where the fit never went, as the held-out
+    /// tail scores what the map fitted on the training part does beyond that part's range.
+    fn fixed_on(&self, _d: &Data<'_>, _i: usize, _rows: &[usize]) -> Option<Vec<f64>> {
+        None
     }
     /// The element's own poles, for an element with linear memory of its own (a store): a
     /// corrected model settles only as fast as its slowest pole, the element's included
@@ -636,6 +645,12 @@ pub fn fit(model: &Model<'_>, d: &Data<'_>, rows: &[usize]) -> Option<Fitted> {
     if starts.is_empty() {
         starts.push(Vec::new());
     }
+    if let Some(on_rows) = model.element.fixed_on(d, model.input, rows) {
+        for p in &mut starts {
+            let k = on_rows.len().min(p.len());
+            p[..k].copy_from_slice(&on_rows[..k]);
+        }
+    }
     let scale = mpmwatch_core::numerics::std_dev(&d.y[d.train.clone()], 0).max(f64::MIN_POSITIVE);
     let sse = |f: &Fitted| -> Option<f64> {
         let s = model.simulate(f, &d.u, d.y)?;
@@ -993,8 +1008,8 @@ mod tests {
     #[test]
     fn a_noise_free_polynomial_is_drawn_as_its_map() {
         let u: Vec<f64> = (0..1200).map(|t| ((t / 13 * 7919) % 41) as f64 / 20.0 - 0.7).collect();
-        let n = u.len() as f64;
-        let m = u.iter().sum::<f64>() / n;
+        // The map's centre is the fitted rows' mean (the first ten rows are the lags' warm-up).
+        let m = u[10..].iter().sum::<f64>() / (u.len() - 10) as f64;
         for (degree, c) in [(2, 0.4), (3, 0.3)] {
             let w_of = |v: f64| v + c * v.powi(degree);
             let slope = 1.0 + c * f64::from(degree) * m.powi(degree - 1);
@@ -1002,7 +1017,7 @@ mod tests {
             for t in 2..u.len() {
                 y[t] = 0.8 * y[t - 1] + 0.5 * w_of(u[t - 2]);
             }
-            let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None, noise_order: 0 };
+            let d = Data { u: vec![&u], y: &y, train: 10..1200, nominal: None, noise_order: 0 };
             let el = polynomial::Polynomial { degree };
             let model = Model {
                 element: &el,
@@ -1015,7 +1030,7 @@ mod tests {
             let truth = |v: f64| (w_of(v) - w_of(m)) / slope + m;
             let span = curve.points.iter().map(|p| truth(p.0)).fold(f64::NEG_INFINITY, f64::max)
                 - curve.points.iter().map(|p| truth(p.0)).fold(f64::INFINITY, f64::min);
-            // The map is the fitted one over the training range; beyond it the powers hold.
+            // The map is the fitted one over the training range; beyond it, its tangent.
             let (lo, hi) = (d.u_quantile(0, 0.0), d.u_quantile(0, 1.0));
             for &(v, got) in curve.points.iter().filter(|p| (lo..=hi).contains(&p.0)) {
                 assert!(
@@ -1027,10 +1042,38 @@ mod tests {
         }
     }
 
+    /// A map fitted on some rows takes its centre, scale and range from those rows, not from
+    /// the training part: fitted on a fold whose rows never reach the input's top, its powers
+    /// go on along their tangent from the fold's own edge over the validation block that does,
+    /// as the held-out tail sees a map fitted on the training part. Exact: the fixed parameters
+    /// are copied, never searched.
+    #[test]
+    fn a_map_fitted_on_a_fold_keeps_that_folds_range() {
+        let u: Vec<f64> =
+            (0..1200).map(|t| ((t / 13 * 7919) % 41) as f64 / 20.0 + t as f64 / 400.0).collect();
+        let mut y = vec![0.0; u.len()];
+        for t in 1..u.len() {
+            y[t] = 0.8 * y[t - 1] + 0.2 * (u[t - 1] + 0.3 * u[t - 1].powi(2));
+        }
+        let d = Data { u: vec![&u], y: &y, train: 0..1200, nominal: None, noise_order: 0 };
+        let rows: Vec<usize> = (10..800).collect();
+        for el in [&polynomial::Polynomial { degree: 2 } as &dyn Element, &bilinear::Bilinear] {
+            let model = Model {
+                element: el,
+                input: 0,
+                orders: Orders { na: 1, nb: 1, nk: vec![1], trend: false, reading: None },
+            };
+            let f = fit(&model, &d, &rows).unwrap();
+            let on_rows = polynomial::centring_of(&u[10..800]);
+            assert_eq!(&f.p[..4], on_rows.as_slice());
+            assert!(on_rows[3] < polynomial::centring_of(&u)[3], "the fold must stop short of the top");
+        }
+    }
+
     /// A fitted polynomial keeps the centre and scale of its training rows: simulating the first
     /// half of the record alone gives the first half of the whole record's simulation (the
     /// simulation is causal, so only the arithmetic's rounding may differ, 1e-9 of the output's
-    /// range), and the centre is the training rows' mean, not the record's. Centred on the
+    /// range), and the centre is the mean of the rows fitted, not the record's. Centred on the
     /// record it is given, the same coefficients would act on other powers.
     #[test]
     fn a_fitted_polynomial_means_the_same_map_on_any_record() {
@@ -1049,8 +1092,8 @@ mod tests {
         };
         let rows: Vec<usize> = (10..800).collect();
         let f = fit(&model, &d, &rows).unwrap();
-        let train_mean = u[..800].iter().sum::<f64>() / 800.0;
-        assert_eq!(f.p[0], train_mean);
+        let fitted_mean = u[10..800].iter().sum::<f64>() / 790.0;
+        assert_eq!(f.p[0], fitted_mean);
         let whole = model.simulate(&f, &[&u], &y).unwrap();
         let half = model.simulate(&f, &[&u[..600]], &y[..600]).unwrap();
         let range = y.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
