@@ -34,7 +34,7 @@ impl Element for Bilinear {
         4
     }
     fn fixed_on(&self, d: &Data<'_>, i: usize, rows: &[usize]) -> Option<Vec<f64>> {
-        Some(polynomial::centring_on(d.u[i], rows))
+        polynomial::centring_on(d.u[i], rows)
     }
     /// Only where the product carries a fifth of its variance beyond the square: correlation
     /// below 0.9 between `z(t)·z(t−1)` and `z(t)²` on the training rows (1 − 0.9² = 0.19). On a

@@ -15,9 +15,8 @@ use crate::candidates::{ActsOn, Physics};
 /// and the held-out tail does not shape the regressors. Beyond the range fitted each power
 /// goes on along its tangent at the edge ([`power`]): a polynomial fitted on a range is not
 /// known outside it, and extrapolated as a polynomial it grows without bound, while held at its
-/// edge value it bends a map that went on curving (a heater's power past the voltages the fit
-/// saw) flat, which cost a development heater its name under cross-validation on folds
-/// (docs/diagnose-history.md, stop 68). The map is linear in its coefficients.
+/// edge value it bends a map that goes on curving (a heater's power past the voltages the fit
+/// saw) flat (docs/diagnose-history.md, stop 68). The map is linear in its coefficients.
 pub struct Polynomial {
     /// 2 (quadratic) or 3 (cubic).
     pub degree: i32,
@@ -33,13 +32,11 @@ pub(super) fn centring_of(x: &[f64]) -> Vec<f64> {
     vec![m, sd, lo, hi]
 }
 
-/// The parameters `[mean, sd, min, max]` of `x` on `rows` (those of all of `x` when `rows` is
-/// empty).
-pub(super) fn centring_on(x: &[f64], rows: &[usize]) -> Vec<f64> {
-    if rows.is_empty() {
-        return centring_of(x);
-    }
-    centring_of(&rows.iter().filter_map(|&t| x.get(t).copied()).collect::<Vec<f64>>())
+/// The parameters `[mean, sd, min, max]` of `x` on `rows`; `None` without rows (the starts'
+/// training-part parameters then stay: the whole record would let the held-out tail in).
+pub(super) fn centring_on(x: &[f64], rows: &[usize]) -> Option<Vec<f64>> {
+    let on: Vec<f64> = rows.iter().filter_map(|&t| x.get(t).copied()).collect();
+    (!on.is_empty()).then(|| centring_of(&on))
 }
 
 /// The standardised value whose power the dynamics see for an input `v`, under `p`.
@@ -78,7 +75,7 @@ impl Element for Polynomial {
         4
     }
     fn fixed_on(&self, d: &Data<'_>, i: usize, rows: &[usize]) -> Option<Vec<f64>> {
-        Some(centring_on(d.u[i], rows))
+        centring_on(d.u[i], rows)
     }
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         let x = u[i];

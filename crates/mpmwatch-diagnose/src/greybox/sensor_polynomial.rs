@@ -63,10 +63,8 @@ impl Element for SensorPolynomial {
         4
     }
     fn fixed_on(&self, d: &Data<'_>, _i: usize, rows: &[usize]) -> Option<Vec<f64>> {
-        let mut p = centring_on(d.y, rows);
-        if !rows.is_empty() {
-            p[0] = median(&rows.iter().map(|&t| d.y[t]).collect::<Vec<f64>>());
-        }
+        let mut p = centring_on(d.y, rows)?;
+        p[0] = median(&rows.iter().filter_map(|&t| d.y.get(t).copied()).collect::<Vec<f64>>());
         Some(p)
     }
     /// The recorded output read back through the start's curve.
