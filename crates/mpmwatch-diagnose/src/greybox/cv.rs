@@ -248,27 +248,38 @@ pub fn linear_orders(
         }
         nk[i] = best;
     }
-    // Scored on every core, then compared in the order listed, so that a tie goes as it would
-    // on one thread.
-    let scored: Vec<(Orders, CvScore)> = (1..=3)
+    ranked_linear(d, folds, base, &Orders { na: 1, nb: 1, nk, trend, reading: None }).into_iter().next()
+}
+
+/// The linear structures at the dead times, drift term and range of `at` (its poles and taps
+/// are not read): one to three poles and one to three taps, each scored by blocked
+/// cross-validation on `folds`, best first by [`CvScore::rank`] against `base` less a tenth of
+/// a point per pole and tap (one more must earn it). A structure that cannot be fitted is left
+/// out; a score that is not a number ranks last.
+pub fn ranked_linear(
+    d: &Data<'_>,
+    folds: &[(Vec<usize>, std::ops::Range<usize>)],
+    base: &CvScore,
+    at: &Orders,
+) -> Vec<(Orders, CvScore)> {
+    let mut scored: Vec<(Orders, CvScore)> = (1..=3)
         .flat_map(|na| (1..=3).map(move |nb| (na, nb)))
         .collect::<Vec<_>>()
         .into_par_iter()
         .filter_map(|(na, nb)| {
-            let orders = Orders { na, nb, nk: nk.clone(), trend, reading: None };
-            let m = Model { element: &lin, input: 0, orders: orders.clone() };
+            let orders = Orders { na, nb, ..at.clone() };
+            let m = Model { element: &Linear, input: 0, orders: orders.clone() };
             cv_fit(&m, d, folds).map(|v| (orders, v))
         })
         .collect();
-    let mut best: Option<(Orders, CvScore)> = None;
-    for (orders, v) in scored {
-        // One more pole or tap must earn a tenth of a point (of FIT, or of prediction gain).
-        let score = |v: &CvScore, o: &Orders| v.rank(base, d.noise_order) - 0.1 * (o.na + o.nb) as f64;
-        if best.as_ref().is_none_or(|b| score(&v, &orders) > score(&b.1, &b.0)) {
-            best = Some((orders, v));
-        }
-    }
-    best
+    let score = |(o, v): &(Orders, CvScore)| {
+        let s = v.rank(base, d.noise_order) - 0.1 * (o.na + o.nb) as f64;
+        if s.is_nan() { f64::NEG_INFINITY } else { s }
+    };
+    // Scored on every core, then sorted stably in the order listed, so that a tie goes as it
+    // would on one thread.
+    scored.sort_by(|a, b| score(b).total_cmp(&score(a)));
+    scored
 }
 
 /// Whether the drift the re-fitted linear model `linear` (its orders, from [`linear_orders`])

@@ -724,7 +724,7 @@ pub fn elements() -> Vec<Box<dyn Element>> {
 
 pub use cv::{
     Beside, CvScore, cv_fit, drift_gain, drift_is_one_line, linear_orders, max_dead_time, nominal_cv_fit,
-    starting_at,
+    ranked_linear, starting_at,
 };
 pub use explain::{Explanation, MIN_ACTING, Names, explain};
 pub use linear::Linear;
