@@ -16,7 +16,9 @@
 //! does within it; a slower mode sets the level the simulation carries from block to block,
 //! which no block checks and the held-out tail, longer than a block, exposes (a near-integrator
 //! fitted to two tanks drifted off the tail's level by tens of percent, docs/diagnose-history.md, stop
-//! 42). A correction that does not settle is withheld, with its time constant. The poles of an
+//! 42). A correction that does not settle is withheld, with its time constant; when it is the
+//! linear re-fit, the best other pole and tap count that settles and ranks within [`PARSIMONY`]
+//! of it is reported in its place (`Judge::settling_refit`). The poles of an
 //! element whose own stores carry the dynamics (a tank cascade) are not read: its slow modes'
 //! levels are set by its own law and its starting levels are fitted ([`settling_time`]). Poles
 //! say nothing of a force fed back that holds the output where it stands (a friction on the
