@@ -31,10 +31,12 @@
 //! is its linear part under a nonlinear name, and the linear re-fit is tried in its place.
 //!
 //! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
-//! Only that one is tried. When it is idle, another element of the window can beat its
-//! linear part by up to about the margin (the window plus what the idle one gained by fitting
-//! noise); trying the next one is not part of the rule (docs/diagnose-history.md, stops 47
-//! and 48).
+//! When it is idle, another element of the window can beat its linear part by up to about the
+//! margin (the window plus what the idle one gained by fitting noise), so no other is tried
+//! (docs/diagnose-history.md, stops 47 and 48). When it does not settle, or remembers its
+//! start, its class is set aside and the rule chooses again among the other classes, each
+//! choice held to the same margin, gate and checks ([`walk`]): a slow store can lead as one
+//! class while another explains the record with dynamics the blocks can check (stop 71).
 //! When nothing is reported, the finding is `unexplained` and says why, each withheld
 //! correction in the order tried.
 //!
@@ -396,8 +398,7 @@ impl Judge<'_> {
     /// The honesty gate, as on the closed-loop path: the correction must raise the mean block
     /// FIT by `min_gain` points and lower no block.
     fn passes(&self, v: &CvScore) -> bool {
-        let n = &self.reference.nominal_cv;
-        v.mean - n.mean >= self.min_gain && v.min_gain_over(n) >= 0.0
+        passes(v, &self.reference.nominal_cv, self.min_gain)
     }
 
     /// The corrected simulation of a fitted structure over the whole record, when it settles
@@ -439,21 +440,41 @@ impl Judge<'_> {
     }
 
     /// The chosen physics element ([`chosen`]), when it beats the linear re-fit by
-    /// [`NONLINEAR_MARGIN`], passes the gate, settles and acts.
+    /// [`NONLINEAR_MARGIN`], passes the gate, settles and acts; when the chosen one does not
+    /// settle, the next class down the ranking ([`walk`]).
     fn element(&mut self, scored: &[Scored], order_sets: &[Orders]) -> Option<Explanation> {
-        let r = self.reference;
+        let (r, els, min_gain) = (self.reference, self.els, self.min_gain);
         let linear_cv = r.linear.as_ref().map_or(f64::NEG_INFINITY, |l| r.rank(&l.1));
-        let (v, k, i, _, o) = chosen(scored, &|v: &CvScore| r.rank(v))?;
-        let beats = r.rank(v) - linear_cv >= NONLINEAR_MARGIN && self.passes(v);
-        if !beats {
-            return None;
-        }
-        let (d, i, names) = (self.d, *i, self.names);
-        let el = self.els[*k].as_ref();
-        let m = Model { element: el, input: i, orders: order_sets[*o].clone() };
-        let f = fit(&m, d, &self.train_rows)?;
-        let sim = self.reportable(&m, &f, el.physics(), v, &r.nominal_cv)?;
+        let beats =
+            |v: &CvScore| r.rank(v) - linear_cv >= NONLINEAR_MARGIN && passes(v, &r.nominal_cv, min_gain);
+        let (i, el, m, f, sim) = walk(
+            scored,
+            &|v: &CvScore| r.rank(v),
+            beats,
+            |s| els[s.1].physics(),
+            |(v, k, i, _, o)| {
+                let el = els[*k].as_ref();
+                let m = Model { element: el, input: *i, orders: order_sets[*o].clone() };
+                let Some(f) = fit(&m, self.d, &self.train_rows) else { return Attempt::Ends };
+                match self.reportable(&m, &f, el.physics(), v, &r.nominal_cv) {
+                    Some(sim) => Attempt::Reported((*i, el, m, f, sim)),
+                    None if self.withheld.last().is_some_and(|w| matches!(w.why, Why::Idle(_))) => {
+                        Attempt::Ends
+                    }
+                    None => Attempt::SetAside,
+                }
+            },
+        )?;
+        let (d, names) = (self.d, self.names);
         let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
+        for w in &self.withheld {
+            summary += &format!(
+                "; {} ranked higher ({:+.1} points) and is not reported: {}",
+                w.name(),
+                w.mean,
+                w.why.text(self.block)
+            );
+        }
         summary += &drift_note(&m, &f, d, names.output);
         summary += &reading_note(r.reading, names.output);
         let tried = std::mem::take(&mut self.tried);
@@ -771,12 +792,63 @@ type Scored = (CvScore, usize, usize, usize, usize);
 
 /// The parsimony rule: among the candidates within [`PARSIMONY`] points of the best by `rank`,
 /// the one with the fewest parameters (the better ranked on a tie).
-fn chosen<'a>(scored: &'a [Scored], rank: &impl Fn(&CvScore) -> f64) -> Option<&'a Scored> {
-    let best = scored.iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
+fn chosen<'a>(
+    scored: impl IntoIterator<Item = &'a Scored> + Clone,
+    rank: &impl Fn(&CvScore) -> f64,
+) -> Option<&'a Scored> {
+    let best = scored.clone().into_iter().map(|s| rank(&s.0)).fold(f64::NEG_INFINITY, f64::max);
     scored
-        .iter()
+        .into_iter()
         .filter(|s| rank(&s.0) >= best - PARSIMONY)
         .min_by(|a, b| a.3.cmp(&b.3).then(rank(&b.0).total_cmp(&rank(&a.0))))
+}
+
+/// The honesty gate: `v` raises the mean block FIT over the nominal's `n` by `min_gain`
+/// points and lowers no block.
+fn passes(v: &CvScore, n: &CvScore, min_gain: f64) -> bool {
+    v.mean - n.mean >= min_gain && v.min_gain_over(n) >= 0.0
+}
+
+/// What trying a chosen candidate came to, in [`walk`].
+enum Attempt<T> {
+    Reported(T),
+    /// Withheld as slower than a block or as remembering its start: another class may
+    /// explain the record with dynamics the blocks can check.
+    SetAside,
+    /// Withheld as idle (it is then its linear part, and no other candidate of the parsimony
+    /// window can beat that by the margin, docs/diagnose-history.md, stop 47), or not fitted.
+    Ends,
+}
+
+/// The parsimony rule walked down the ranking: the candidate [`chosen`] among those left must
+/// pass `beats` (the margin over the linear re-fit and the gate), and is then tried; when it is
+/// set aside, every candidate of its class (`class`) is too, and the rule chooses again among
+/// the rest. A slow store can rank first as one class (a quadratic on the input, whose fitted
+/// linear part carries a mode slower than a block) while another with faster dynamics
+/// explains the same record within the margin's reach of it (docs/diagnose-history.md,
+/// stops 68, 70 and 71).
+fn walk<T>(
+    scored: &[Scored],
+    rank: &impl Fn(&CvScore) -> f64,
+    beats: impl Fn(&CvScore) -> bool,
+    class: impl Fn(&Scored) -> Physics,
+    mut attempt: impl FnMut(&Scored) -> Attempt<T>,
+) -> Option<T> {
+    let mut left: Vec<&Scored> = scored.iter().collect();
+    loop {
+        let next = chosen(left.iter().copied(), rank)?;
+        if !beats(&next.0) {
+            return None;
+        }
+        match attempt(next) {
+            Attempt::Reported(t) => return Some(t),
+            Attempt::Ends => return None,
+            Attempt::SetAside => {
+                let set_aside = class(next);
+                left.retain(|s| class(s) != set_aside);
+            }
+        }
+    }
 }
 
 /// The advice beside a correction withheld as slower than a validation block: the record
@@ -1224,5 +1296,54 @@ mod tests {
         assert_eq!(mean_of(&[c(50.0, 9), c(49.6, 7), c(49.5, 5)]), Some(49.5));
         assert_eq!(mean_of(&[c(50.0, 9)]), Some(50.0));
         assert_eq!(mean_of(&[]), None);
+    }
+
+    /// The walk down the ranking, on scores alone: the element index (the second field) stands
+    /// for the class, `beats` for the margin over a linear re-fit at 40 and the gate, and
+    /// `attempt` for the fit and its checks, by class.
+    /// - A class set aside (slow) passes the choice to the next class; the set-aside class's
+    ///   other candidates go with it, even within the window.
+    /// - An idle one, a failed fit or a next choice that does not beat the linear re-fit ends
+    ///   the walk with nothing.
+    #[test]
+    fn a_slow_choice_gives_way_to_the_next_class_and_an_idle_one_ends_the_walk() {
+        let c = |mean: f64, class: usize, complexity: usize| {
+            (CvScore { mean, blocks: vec![mean], prediction_rms: vec![] }, class, 0, complexity, 0)
+        };
+        let rank = |v: &CvScore| v.mean;
+        let beats = |v: &CvScore| v.mean - 40.0 >= NONLINEAR_MARGIN;
+        let class = |s: &Scored| [Physics::Quadratic, Physics::Saturation, Physics::DeadZone][s.1];
+        let scored = [c(50.0, 0, 9), c(49.8, 0, 7), c(49.0, 1, 5), c(45.0, 2, 5), c(40.2, 2, 3)];
+        let run = |slow: &[usize], idle: &[usize]| {
+            let mut tried = Vec::new();
+            let got = walk(&scored, &rank, beats, class, |s| {
+                tried.push(s.1);
+                if slow.contains(&s.1) {
+                    Attempt::SetAside
+                } else if idle.contains(&s.1) {
+                    Attempt::Ends
+                } else {
+                    Attempt::Reported(s.0.mean)
+                }
+            });
+            (got, tried)
+        };
+        // Nothing withheld: the parsimony rule's choice, the quadratic's simpler fit.
+        assert_eq!(run(&[], &[]), (Some(49.8), vec![0]));
+        // The quadratic slow: its 50.0 goes with it, and the saturation (49.0) is reported.
+        assert_eq!(run(&[0], &[]), (Some(49.0), vec![0, 1]));
+        // The quadratic and the saturation slow: the dead zone's 45.0 beats the linear 40.
+        assert_eq!(run(&[0, 1], &[]), (Some(45.0), vec![0, 1, 2]));
+        // The quadratic idle: the walk ends, the saturation is not tried.
+        assert_eq!(run(&[], &[0]), (None, vec![0]));
+        // Every class slow: nothing left to choose.
+        assert_eq!(run(&[0, 1, 2], &[]), (None, vec![0, 1, 2]));
+        // Only the dead zone's 40.2 left: it does not beat the linear re-fit by the margin.
+        let weak = [c(50.0, 0, 9), c(40.2, 2, 3)];
+        let got = walk(&weak, &rank, beats, class, |s| match s.1 {
+            0 => Attempt::SetAside,
+            _ => Attempt::Reported(s.0.mean),
+        });
+        assert_eq!(got, None);
     }
 }
