@@ -811,6 +811,7 @@ fn passes(v: &CvScore, n: &CvScore, min_gain: f64) -> bool {
 
 /// What trying a chosen candidate came to, in [`walk`].
 enum Attempt<T> {
+    /// It passed every check: the finding.
     Reported(T),
     /// Withheld as slower than a block or as remembering its start: another class may
     /// explain the record with dynamics the blocks can check.
@@ -824,8 +825,8 @@ enum Attempt<T> {
 /// pass `beats` (the margin over the linear re-fit and the gate), and is then tried; when it is
 /// set aside, every candidate of its class (`class`) is too, and the rule chooses again among
 /// the rest. A slow store can rank first as one class (a quadratic on the input, whose fitted
-/// linear part carries a mode slower than a block) while another with faster dynamics
-/// explains the same record within the margin's reach of it (docs/diagnose-history.md,
+/// linear part carries a mode slower than a block) while another class, ranked below it,
+/// explains the same record with dynamics the blocks can check (docs/diagnose-history.md,
 /// stops 68, 70 and 71).
 fn walk<T>(
     scored: &[Scored],
