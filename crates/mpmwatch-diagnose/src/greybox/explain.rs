@@ -469,7 +469,7 @@ impl Judge<'_> {
         let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
         for w in &self.withheld {
             summary += &format!(
-                "; {} ranked higher ({:+.1} points) and is not reported: {}",
+                "; {} ranked higher (it raises the cross-validated FIT by {:+.1} points) and is not reported: {}",
                 w.name(),
                 w.mean,
                 w.why.text(self.block)
