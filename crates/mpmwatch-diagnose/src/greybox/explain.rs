@@ -404,9 +404,9 @@ impl Judge<'_> {
     /// The corrected simulation of a fitted structure over the whole record, when it settles
     /// within a validation block (its poles, and with a feedback element its memory of where it
     /// started, [`memory_time`]) and its element, if it says where it acts, acts on at least
-    /// [`MIN_ACTING`] of the training rows. Otherwise `None`, and the correction is kept in
-    /// `withheld` with its reason and its gain `v` against `against`, the score its gate
-    /// measured it with (nothing is kept when it cannot be simulated).
+    /// [`MIN_ACTING`] of the training rows. Otherwise the reason, `Err(Some(why))`, and the
+    /// correction is kept in `withheld` with it and its gain `v` against `against`, the score
+    /// its gate measured it with; `Err(None)`, with nothing kept, when it cannot be simulated.
     fn reportable(
         &mut self,
         m: &Model<'_>,
@@ -414,29 +414,29 @@ impl Judge<'_> {
         physics: Physics,
         v: &CvScore,
         against: &CvScore,
-    ) -> Option<Vec<f64>> {
-        let held =
-            |why| Withheld { physics, why, mean: v.mean - against.mean, worst: v.min_gain_over(against) };
+    ) -> Result<Vec<f64>, Option<Why>> {
+        let mut hold = |why: Why| {
+            let (mean, worst) = (v.mean - against.mean, v.min_gain_over(against));
+            self.withheld.push(Withheld { physics, why, mean, worst });
+            Err(Some(why))
+        };
         let tau = settling_time(m, f);
         if tau >= self.block {
-            self.withheld.push(held(Why::Slow(tau)));
-            return None;
+            return hold(Why::Slow(tau));
         }
         let d = self.d;
         if m.element.feedbacks() > 0 {
-            let memory = memory_time(m, f, d)?;
+            let memory = memory_time(m, f, d).ok_or(None)?;
             if memory >= self.block {
-                self.withheld.push(held(Why::Remembers(memory)));
-                return None;
+                return hold(Why::Remembers(memory));
             }
         }
-        let sim = m.simulate_held(f, &d.u, d.y, d.train.end.saturating_sub(1))?;
+        let sim = m.simulate_held(f, &d.u, d.y, d.train.end.saturating_sub(1)).ok_or(None)?;
         let share = m.acting_share(f, &d.u, &sim, &self.train_rows);
         if let Some(share) = share.filter(|&a| a.is_nan() || a < MIN_ACTING) {
-            self.withheld.push(held(Why::Idle(share)));
-            return None;
+            return hold(Why::Idle(share));
         }
-        Some(sim)
+        Ok(sim)
     }
 
     /// The chosen physics element ([`chosen`]), when it beats the linear re-fit by
@@ -457,11 +457,9 @@ impl Judge<'_> {
                 let m = Model { element: el, input: *i, orders: order_sets[*o].clone() };
                 let Some(f) = fit(&m, self.d, &self.train_rows) else { return Attempt::Ends };
                 match self.reportable(&m, &f, el.physics(), v, &r.nominal_cv) {
-                    Some(sim) => Attempt::Reported((*i, el, m, f, sim)),
-                    None if self.withheld.last().is_some_and(|w| matches!(w.why, Why::Idle(_))) => {
-                        Attempt::Ends
-                    }
-                    None => Attempt::SetAside,
+                    Ok(sim) => Attempt::Reported((*i, el, m, f, sim)),
+                    Err(Some(Why::Idle(_))) => Attempt::Ends,
+                    Err(_) => Attempt::SetAside,
                 }
             },
         )?;
@@ -508,15 +506,12 @@ impl Judge<'_> {
         let f = fit(&m, d, &self.train_rows)?;
         let (orders, v, f, sim, slower) =
             match self.reportable(&m, &f, Physics::Unexplained, best_v, &r.nominal_cv) {
-                Some(sim) => (best.clone(), best_v.clone(), f, sim, None),
-                None => {
-                    let tau = settling_time(&m, &f);
-                    if tau < self.block {
-                        return None;
-                    }
+                Ok(sim) => (best.clone(), best_v.clone(), f, sim, None),
+                Err(Some(Why::Slow(tau))) => {
                     let (o, v, f, sim) = self.settling_refit(best, best_v)?;
                     (o, v, f, sim, Some(tau))
                 }
+                Err(_) => return None,
             };
         let orders = &orders;
         let m = Model { element: &Linear, input: 0, orders: orders.clone() };
@@ -604,7 +599,7 @@ impl Judge<'_> {
         let f = fit(&m, d, &self.train_rows)?;
         // Its gains, withheld or reported, are against the nominal as it is (`raw`), the
         // currency of its gate.
-        let sim = self.reportable(&m, &f, Physics::Saturation, &v, raw)?;
+        let sim = self.reportable(&m, &f, Physics::Saturation, &v, raw).ok()?;
         let i = self.flagged.first().copied().unwrap_or(0);
         let (mut summary, parameters) = el.describe(&f.p, names.inputs[i], names.output);
         summary += &drift_note(&m, &f, d, names.output);
@@ -737,6 +732,7 @@ impl Withheld {
 }
 
 /// Why a correction was withheld.
+#[derive(Clone, Copy)]
 enum Why {
     /// Its slowest time constant, in samples, is at least a validation block.
     Slow(f64),
@@ -814,7 +810,8 @@ enum Attempt<T> {
     /// It passed every check: the finding.
     Reported(T),
     /// Withheld as slower than a block or as remembering its start: another class may
-    /// explain the record with dynamics the blocks can check.
+    /// explain the record with dynamics the blocks can check. A fit that cannot be simulated
+    /// over the record is set aside too, with nothing kept of it.
     SetAside,
     /// Withheld as idle (it is then its linear part, and no other candidate of the parsimony
     /// window can beat that by the margin, docs/diagnose-history.md, stop 47), or not fitted.
