@@ -30,8 +30,9 @@
 //! kink lies where the record hardly goes, on fewer than [`MIN_ACTING`] of the training rows,
 //! is its linear part under a nonlinear name, and the linear re-fit is tried in its place.
 //!
-//! Among elements within [`PARSIMONY`] points of the best, the one with fewest parameters wins.
-//! When it is idle, another element of the window can beat its linear part by up to about the
+//! Among the elements that beat the linear re-fit by the margin and pass the gate, those within
+//! [`PARSIMONY`] points of the best, the one with fewest parameters wins; one that fails the
+//! gate (it lowers a block) does not hide one below it that passes (stop 72). When it is idle, another element of the window can beat its linear part by up to about the
 //! margin (the window plus what the idle one gained by fitting noise), so no other is tried
 //! (docs/diagnose-history.md, stops 47 and 48). When it does not settle, or remembers its
 //! start, its class is set aside and the rule chooses again among the other classes, each
@@ -439,9 +440,9 @@ impl Judge<'_> {
         Ok(sim)
     }
 
-    /// The chosen physics element ([`chosen`]), when it beats the linear re-fit by
-    /// [`NONLINEAR_MARGIN`], passes the gate, settles and acts; when the chosen one does not
-    /// settle, the next class down the ranking ([`walk`]).
+    /// The physics element chosen ([`chosen`]) among those that beat the linear re-fit by
+    /// [`NONLINEAR_MARGIN`] and pass the gate, when it settles and acts; when the chosen one
+    /// does not settle, the next class down the ranking ([`walk`]).
     fn element(&mut self, scored: &[Scored], order_sets: &[Orders]) -> Option<Explanation> {
         let (r, els, min_gain) = (self.reference, self.els, self.min_gain);
         let linear_cv = r.linear.as_ref().map_or(f64::NEG_INFINITY, |l| r.rank(&l.1));
@@ -818,10 +819,11 @@ enum Attempt<T> {
     Ends,
 }
 
-/// The parsimony rule walked down the ranking: the candidate [`chosen`] among those left must
-/// pass `beats` (the margin over the linear re-fit and the gate), and is then tried; when it is
-/// set aside, every candidate of its class (`class`) is too, and the rule chooses again among
-/// the rest. A slow store can rank first as one class (a quadratic on the input, whose fitted
+/// The parsimony rule walked down the ranking: it chooses ([`chosen`]) among the candidates
+/// that pass `beats` (the margin over the linear re-fit and the gate), so one that lowers a
+/// block does not hide one below it that passes (docs/diagnose-history.md, stop 72); the choice
+/// is tried, and when it is set aside, every candidate of its class (`class`) is too, and the
+/// rule chooses again among the rest. A slow store can rank first as one class (a quadratic on the input, whose fitted
 /// linear part carries a mode slower than a block) while another class, ranked below it,
 /// explains the same record with dynamics the blocks can check (docs/diagnose-history.md,
 /// stops 68, 70 and 71).
@@ -832,12 +834,9 @@ fn walk<T>(
     class: impl Fn(&Scored) -> Physics,
     mut attempt: impl FnMut(&Scored) -> Attempt<T>,
 ) -> Option<T> {
-    let mut left: Vec<&Scored> = scored.iter().collect();
+    let mut left: Vec<&Scored> = scored.iter().filter(|s| beats(&s.0)).collect();
     loop {
         let next = chosen(left.iter().copied(), rank)?;
-        if !beats(&next.0) {
-            return None;
-        }
         match attempt(next) {
             Attempt::Reported(t) => return Some(t),
             Attempt::Ends => return None,
@@ -1301,8 +1300,9 @@ mod tests {
     /// `attempt` for the fit and its checks, by class.
     /// - A class set aside (slow) passes the choice to the next class; the set-aside class's
     ///   other candidates go with it, even within the window.
-    /// - An idle one, a failed fit or a next choice that does not beat the linear re-fit ends
-    ///   the walk with nothing.
+    /// - An idle one or a failed fit ends the walk with nothing, and so does a choice left with
+    ///   no candidate that beats the linear re-fit.
+    /// - A candidate that fails the gate is not chosen, and does not hide one that passes.
     #[test]
     fn a_slow_choice_gives_way_to_the_next_class_and_an_idle_one_ends_the_walk() {
         let c = |mean: f64, class: usize, complexity: usize| {
@@ -1343,5 +1343,13 @@ mod tests {
             _ => Attempt::Reported(s.0.mean),
         });
         assert_eq!(got, None);
+        // The best by the blocks fails the gate (a block below the nominal's 30): it does not
+        // hide the dead zone below it, which passes and beats the linear re-fit.
+        let gated = |v: &CvScore| beats(v) && v.blocks.iter().all(|&b| b >= 30.0);
+        let mut lower = c(50.0, 0, 9);
+        lower.0.blocks = vec![80.0, 60.0, 10.0];
+        let hidden = [lower, c(45.0, 2, 5)];
+        let got = walk(&hidden, &rank, gated, class, |s| Attempt::Reported(s.0.mean));
+        assert_eq!(got, Some(45.0));
     }
 }
