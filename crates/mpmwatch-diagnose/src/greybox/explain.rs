@@ -32,7 +32,8 @@
 //!
 //! Among the elements that beat the linear re-fit by the margin and pass the gate, those within
 //! [`PARSIMONY`] points of the best, the one with fewest parameters wins; one that fails the
-//! gate (it lowers a block) does not hide one below it that passes (stop 72). When it is idle, another element of the window can beat its linear part by up to about the
+//! gate (it lowers a block) does not hide one below it that passes (stop 72). When the winner
+//! is idle, another element of the window can beat its linear part by up to about the
 //! margin (the window plus what the idle one gained by fitting noise), so no other is tried
 //! (docs/diagnose-history.md, stops 47 and 48). When it does not settle, or remembers its
 //! start, its class is set aside and the rule chooses again among the other classes, each
@@ -823,10 +824,10 @@ enum Attempt<T> {
 /// that pass `beats` (the margin over the linear re-fit and the gate), so one that lowers a
 /// block does not hide one below it that passes (docs/diagnose-history.md, stop 72); the choice
 /// is tried, and when it is set aside, every candidate of its class (`class`) is too, and the
-/// rule chooses again among the rest. A slow store can rank first as one class (a quadratic on the input, whose fitted
-/// linear part carries a mode slower than a block) while another class, ranked below it,
-/// explains the same record with dynamics the blocks can check (docs/diagnose-history.md,
-/// stops 68, 70 and 71).
+/// rule chooses again among the rest. A slow store can rank first as one class (a quadratic
+/// on the input, whose fitted linear part carries a mode slower than a block) while another
+/// class, ranked below it, explains the same record with dynamics the blocks can check
+/// (docs/diagnose-history.md, stops 68, 70 and 71).
 fn walk<T>(
     scored: &[Scored],
     rank: &impl Fn(&CvScore) -> f64,
