@@ -132,7 +132,7 @@ pub trait Element: Sync {
     /// without a decaying mode (backlash). A feedback element (cubic stiffness) moves the
     /// linear part's poles with the operating point instead, which is not read here; how long
     /// a structure with one remembers where it started is simulated instead (`memory_time` in
-    /// explain.rs).
+    /// explain/judge.rs).
     fn poles(&self, _p: &[f64]) -> Vec<f64> {
         Vec::new()
     }
