@@ -41,7 +41,6 @@
 //! class while another explains the record with dynamics the blocks can check (stop 71).
 //! When nothing is reported, the finding is `unexplained` and says why, each withheld
 //! correction in the order tried.
-//!
 
 use crate::describe::num;
 use mpmwatch_core::numerics::std_dev;
