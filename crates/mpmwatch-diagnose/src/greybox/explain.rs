@@ -28,16 +28,16 @@
 //! times included, are searched on the record as it is, before the range is applied.) When no
 //! element is named, the linear re-fit read through the range is one correction of two parts:
 //! what the range alone adds (the nominal read through it, against the nominal as it is) and
-//! what the linear change adds beside it. The larger names it: a linear change (a transport delay
-//! behind a pinned transmitter), or the range itself, a clip on the output, when the re-fit
-//! read through it passes the gate against the nominal as it is (a linear plant behind a
-//! pinned instrument, a clip the range reproduces).
+//! what the linear change adds beside it. The larger names it (`Judge::range_alone`): a linear
+//! change (a transport delay behind a pinned transmitter), or the range itself, a clip on the
+//! output, when the re-fit read through it passes the gate against the nominal as it is (a
+//! linear plant behind a pinned instrument, a clip the range reproduces).
 //!
 //! On a dithered record ([`Data::noise_order`] above 0) the candidates, the linear re-fit and
 //! the parsimony are ranked instead by the cross-validated one-step prediction error
-//! ([`CvScore::rank`]): [`judge::NONLINEAR_MARGIN`] and [`judge::PARSIMONY`] then count points of prediction
-//! gain (percent of the nominal's prediction RMS), the same numbers not re-argued for that
-//! scale; the gate against the nominal stays the FIT's.
+//! ([`CvScore::rank`]): [`judge::NONLINEAR_MARGIN`] and [`judge::PARSIMONY`] then count
+//! points of prediction gain (percent of the nominal's prediction RMS), the same numbers not
+//! re-argued for that scale; the gate against the nominal stays the FIT's.
 
 use rayon::prelude::*;
 
@@ -51,8 +51,8 @@ use crate::report::{Finding, Tried};
 
 mod judge;
 
+use judge::Judge;
 pub use judge::MIN_ACTING;
-use judge::{Judge, Scored};
 
 /// What the grey-box step decided for one output.
 pub struct Explanation {
@@ -130,6 +130,10 @@ pub fn explain(
     }
     judge.unexplained(&scored)
 }
+
+/// A scored candidate: its cross-validated score, the element's index in [`elements`], the
+/// input it acts on, its parameter count and the index of its linear orders.
+type Scored = (CvScore, usize, usize, usize, usize);
 
 /// What every hypothesis of one output is scored against: the best re-fitted linear
 /// structure, the nominal's score, and the nuisances every structure carries (a drift, an
@@ -455,11 +459,11 @@ mod tests {
     /// blocks' best re-fit is not reported. The creep follows the staircase's mean over
     /// hundreds of samples:
     /// - with `g = 0.02` it is worth a fraction of a point on the blocks, within
-    ///   [`PARSIMONY`], and one pole, which settles, is reported in its place: a time constant,
+    ///   [`judge::PARSIMONY`], and one pole, which settles, is reported in its place: a time constant,
     ///   the fast pole's, nearer its `0.7/(1 − 0.7)` = 2.3 samples than the nominal's 9 (the
     ///   convention that states the nominal's 9.000 s);
     /// - with `g = 0.5` (a fifth of the fast part's swing) it is worth points, no structure
-    ///   without it comes within [`PARSIMONY`], and the slow re-fit is withheld, as before.
+    ///   without it comes within [`judge::PARSIMONY`], and the slow re-fit is withheld, as before.
     #[test]
     fn a_re_fit_that_does_not_settle_gives_way_only_to_one_as_good() {
         let u = staircase();

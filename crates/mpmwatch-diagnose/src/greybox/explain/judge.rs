@@ -8,8 +8,13 @@
 //!   lowers no block below the nominal's;
 //! - otherwise the linear re-fit is the finding (a gain, a time constant or a dead time,
 //!   whichever it changes most) when it passes the same two tests against the nominal;
+//! - otherwise, on a record read through its instrument's range, the range alone when it adds
+//!   more than the linear change beside it (the parent module's doc);
 //! - otherwise the finding is `unexplained`, naming the best candidate, its mean gain and its
 //!   worst block's.
+//!
+//! On a dithered record the ranking currency is the one-step prediction error instead (the
+//! parent module's doc; [`super::super::CvScore::rank`]).
 //!
 //! Either finding also needs a corrected model that settles within a validation block: its
 //! slowest pole's time constant shorter than the shortest block. A block checks what a model
@@ -49,7 +54,7 @@ use std::collections::BTreeMap;
 use super::super::clip_sensor::ClipSensor;
 use super::super::linear_change::{at_the_bound, changed_most, linear_change};
 use super::super::{CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, fit, ranked_linear};
-use super::{Explanation, Names, Reference};
+use super::{Explanation, Names, Reference, Scored};
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
 use crate::report::{Finding, Tried};
@@ -411,7 +416,7 @@ fn drift_note(m: &Model<'_>, f: &Fitted, d: &Data<'_>, output: &str) -> String {
 }
 
 /// The sentence a finding carries when every structure, the nominal's reference included, was
-/// read through the instrument's range the record shows ([`pinned`]); empty without one.
+/// read through the instrument's range the record shows ([`super::super::pinned`]); empty without one.
 fn reading_note(reading: Option<super::super::Reading>, output: &str) -> String {
     reading.map_or(String::new(), |r| {
         format!("; every structure, and the nominal compared with them, read through the range the record shows: {}", r.describe(output))
@@ -486,10 +491,6 @@ impl Why {
         }
     }
 }
-
-/// A scored candidate: its cross-validated score, the element's index in [`elements`], the
-/// input it acts on, its parameter count and the index of its linear orders.
-pub(super) type Scored = (CvScore, usize, usize, usize, usize);
 
 /// The parsimony rule: among the candidates within [`PARSIMONY`] points of the best by `rank`,
 /// the one with the fewest parameters (the better ranked on a tie).
