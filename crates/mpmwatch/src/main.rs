@@ -122,9 +122,11 @@ enum Verb {
     ///
     /// Record length: the training part must hold the plant's slow modes several times over,
     /// since a correction slower than a validation block is withheld (unless it is an
-    /// integrator, the finding then says how long a record would give blocks that long). On generated open-loop
-    /// cases, 3000 samples name the physics in about 84 % of cases and 1500 in about 75 %
-    /// (docs/diagnose-history.md, stop 45). Time grows about in proportion to the record: one
+    /// integrator, the finding then says how long a record would give blocks that long). On
+    /// generated open-loop cases, 3000 samples name the physics in about 91 % of cases (eleven
+    /// sets of 45, stops 67–73), 1500 and 1000 samples in about 84 % (one set each) and 6000 in
+    /// 45 of 45; a slow plant (a tank) is named less often in a short record
+    /// (docs/diagnose-history.md, stop 73). Time grows about in proportion to the record: one
     /// open-loop output took 16 to 32 s at 3000 samples and 1.4 to 5.5 min at 24 000 on a
     /// 2-core machine (docs/diagnose.md, "Time against record length"); cut a much longer
     /// record to a window that holds the slow modes several times over. In open loop every

@@ -371,14 +371,8 @@ fn draw_xy<DB: DrawingBackend>(
 ) -> DrawResult<DB> {
     root.fill(&WHITE)?;
     let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-    let ys = series.iter().flat_map(|s| {
-        s.points.iter().enumerate().flat_map(move |(k, p)| {
-            let e = s.error.as_ref().map_or(0.0, |e| e[k]);
-            [p.1 - e, p.1 + e]
-        })
-    });
     let (x0, x1) = bounds(xs);
-    let (y0, y1) = bounds(ys.chain([0.0]));
+    let (y0, y1) = y_bounds(series);
     let mut chart = ChartBuilder::on(root)
         .caption(title, (FONT, 16))
         .margin(12)
@@ -430,6 +424,20 @@ fn draw_xy<DB: DrawingBackend>(
         .label_font((FONT, 12))
         .draw()?;
     Ok(())
+}
+
+/// The y axis of an x–y chart: from zero when a series is a study's points (markers), so that
+/// sizes compare by eye; the signals' own range, padded, when every series is a line, since a
+/// level far from zero (a temperature at 32 °C, a tank at 9 V) would otherwise draw flat.
+fn y_bounds(series: &[XySeries]) -> (f64, f64) {
+    let ys = series.iter().flat_map(|s| {
+        s.points.iter().enumerate().flat_map(move |(k, p)| {
+            let e = s.error.as_ref().map_or(0.0, |e| e[k]);
+            [p.1 - e, p.1 + e]
+        })
+    });
+    let zero = series.iter().any(|s| s.markers).then_some(0.0);
+    bounds(ys.chain(zero))
 }
 
 /// The corner of the plot whose box (45 % of the width, 35 % of the height) holds the fewest
@@ -557,8 +565,19 @@ mod before_after_tests {
 }
 
 #[cfg(test)]
-mod legend_tests {
+mod xy_chart_tests {
     use super::*;
+
+    /// Signals between 32 and 35 fill the axis (padded by 8 % of their span, 0.24 each side);
+    /// the same values as a study's points keep zero on it.
+    #[test]
+    fn a_signal_fills_its_axis_and_a_study_starts_at_zero() {
+        let pts: Vec<(f64, f64)> = (0..=3).map(|k| (k as f64, 32.0 + k as f64)).collect();
+        let (lo, hi) = y_bounds(&[XySeries::line("T", pts.clone(), false, (0, 0, 0), 1)]);
+        assert!((lo - 31.76).abs() < 1e-9 && (hi - 35.24).abs() < 1e-9, "{lo} {hi}");
+        let (lo, hi) = y_bounds(&[XySeries::points("rate", pts, None)]);
+        assert!(lo < 0.0 && lo > -3.0 && hi > 35.0, "{lo} {hi}");
+    }
 
     /// A line rising from the lower left to the upper right leaves the other two corners empty;
     /// of those, the upper left comes first. A line along the top leaves both lower corners.
