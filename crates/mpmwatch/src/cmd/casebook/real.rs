@@ -146,22 +146,46 @@ fn real_case(
 /// ARX(2,3) fitted on the low-amplitude samples 2 000..10 000, simulated over the whole arrow,
 /// diagnosed on its last 10 000 samples (the largest amplitudes, where the cubic term shows).
 pub(super) fn silverbox(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    silverbox_window(data, opts, fig, "silverbox", 30_000..40_000)
+}
+
+/// Silverbox, the odd multisine that follows the arrow head in SNLS80mV, samples 60 000..70 000,
+/// against the same ARX(2,3) fitted on the arrow's low amplitudes: another experiment on the
+/// same circuit, first diagnosed at stop 74 (docs/diagnose-history.md).
+pub(super) fn silverbox_multisine(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+) -> anyhow::Result<RealResult> {
+    silverbox_window(data, opts, fig, "silverbox_multisine", 60_000..70_000)
+}
+
+/// The Silverbox's linear ARX(2,3), fitted on SNLS80mV's samples 2 000..10 000 (the arrow
+/// head's low amplitudes), simulated from the record's start up to the end of window `w`, which
+/// is diagnosed.
+fn silverbox_window(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+    name: &str,
+    w: std::ops::Range<usize>,
+) -> anyhow::Result<RealResult> {
     let p = data.join("silverbox/SNLS80mV.csv");
     let (h, c) = read_plain(&p)?;
     let (v1, v2) = (column(&h, &c, "V1", &p)?, column(&h, &c, "V2", &p)?);
     anyhow::ensure!(
-        v1.len().min(v2.len()) >= 40_000,
-        "{}: {} rows, where the arrow head takes the first 40 000",
+        v1.len().min(v2.len()) >= w.end,
+        "{}: {} rows, where the window {name} ends at row {}",
         p.display(),
-        v1.len().min(v2.len())
+        v1.len().min(v2.len()),
+        w.end
     );
-    let (u_all, y_all) = (&v1[..40_000], &v2[..40_000]);
+    let (u_all, y_all) = (&v1[..w.end], &v2[..w.end]);
     let s_all = arx_simulation(u_all, y_all, 2, 3, 0, 2_000..10_000)?;
-    let w = 30_000..40_000;
     let (u, y, s) = (u_all[w.clone()].to_vec(), y_all[w.clone()].to_vec(), s_all[w].to_vec());
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 / 610.35).collect();
     real_case(
-        "silverbox",
+        name,
         "linear ARX(2,3) fitted on low-amplitude samples",
         time,
         u,
@@ -179,16 +203,49 @@ pub(super) fn silverbox(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyh
 /// seldom changes sign and the |·| sensor hardly matters there), simulated on the PRBS ±1
 /// experiment (`u1 → z1`), where the speed does change sign.
 pub(super) fn ced(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    ced_on(data, opts, fig, "ced", "DATAPRBS.csv", "u1", "z1")
+}
+
+/// The drives' PRBS ±1.5 experiment (`u2 → z2`) against the same calibrated ARX(3,3): first
+/// diagnosed at stop 74.
+pub(super) fn ced_prbs_large(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    ced_on(data, opts, fig, "ced_u2z2", "DATAPRBS.csv", "u2", "z2")
+}
+
+/// The drives' PRBS ±0.5 experiment (`u3 → z3`) against the same calibrated ARX(3,3): first
+/// diagnosed at stop 74.
+pub(super) fn ced_prbs_small(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    ced_on(data, opts, fig, "ced_u3z3", "DATAPRBS.csv", "u3", "z3")
+}
+
+/// The drives' first uniform-input experiment (`u11 → z11`, the speed changing sign) against
+/// the ARX(3,3) calibrated on the second: first diagnosed at stop 74.
+pub(super) fn ced_uniform(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    ced_on(data, opts, fig, "ced_u11z11", "DATAUNIF.csv", "u11", "z11")
+}
+
+/// One experiment of the coupled drives (`file`, columns `uc → yc`) against the linear
+/// ARX(3,3) calibrated on `u12 → z12` of DATAUNIF.csv, simulated from the experiment's first
+/// speed.
+fn ced_on(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+    name: &str,
+    file: &str,
+    uc: &str,
+    yc: &str,
+) -> anyhow::Result<RealResult> {
     let pu = data.join("ced/DATAUNIF.csv");
     let (hu, cu) = read_plain(&pu)?;
-    let (uc, yc) = (column(&hu, &cu, "u12", &pu)?, column(&hu, &cu, "z12", &pu)?);
-    let p = data.join("ced/DATAPRBS.csv");
+    let (ucal, ycal) = (column(&hu, &cu, "u12", &pu)?, column(&hu, &cu, "z12", &pu)?);
+    let p = data.join("ced").join(file);
     let (h, c) = read_plain(&p)?;
-    let (u, y) = (column(&h, &c, "u1", &p)?, column(&h, &c, "z1", &p)?);
-    let s = arx(&uc, &yc, 3, 3, 1, 0..uc.len())?.simulate_from(&[&u], y[0])?;
+    let (u, y) = (column(&h, &c, uc, &p)?, column(&h, &c, yc, &p)?);
+    let s = arx(&ucal, &ycal, 3, 3, 1, 0..ucal.len())?.simulate_from(&[&u], y[0])?;
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 0.02).collect();
     real_case(
-        "ced",
+        name,
         "linear ARX(3,3) calibrated on DATAUNIF u12→z12",
         time,
         u,
@@ -204,12 +261,30 @@ pub(super) fn ced(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Re
 /// TCLab sine test (heater 1 swept sinusoidally 0–100 %, period 5 min): temperature 1 against a
 /// linear first-order ARX(1,1) model fitted on the first 70 % (the training part).
 pub(super) fn tclab(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    tclab_on(data, opts, fig, "tclab", "T1")
+}
+
+/// The same sine test read at the neighbouring sensor, temperature 2, which heater 1 warms
+/// through the board: first diagnosed at stop 74.
+pub(super) fn tclab_neighbour(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    tclab_on(data, opts, fig, "tclab_t2", "T2")
+}
+
+/// The TCLab sine test's heater 1 against temperature column `yc`, with a linear first-order
+/// ARX(1,1) (one sample of dead time) fitted on the record's first 70 %.
+fn tclab_on(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+    name: &str,
+    yc: &str,
+) -> anyhow::Result<RealResult> {
     let p = data.join("tclab/tclab_sine_test_5min_period.csv");
     let (h, c) = read_plain(&p)?;
-    let (time, u, y) = (column(&h, &c, "Time", &p)?, column(&h, &c, "Q1", &p)?, column(&h, &c, "T1", &p)?);
+    let (time, u, y) = (column(&h, &c, "Time", &p)?, column(&h, &c, "Q1", &p)?, column(&h, &c, yc, &p)?);
     let n = time.len();
     let s = arx_simulation(&u, &y, 1, 1, 1, 0..(n * 7 / 10))?;
-    real_case("tclab", "linear first-order ARX(1,1)", time, u, y, s, "say what it finds", None, opts, fig)
+    real_case(name, "linear first-order ARX(1,1)", time, u, y, s, "say what it finds", None, opts, fig)
 }
 
 /// Cascaded tanks: a Torricelli two-tank simulation without overflow, calibrated on the
@@ -246,24 +321,40 @@ pub(super) fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::
 /// validation record from its first level, which is diagnosed with the casebook's settings
 /// (the last 30 % held out).
 pub(super) fn tanks_arx(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+    tanks_arx_on(data, opts, fig, "cascaded_tanks_arx", ("uEst", "yEst"), ("uVal", "yVal"))
+}
+
+/// The same with the records' roles swapped: the ARX fitted on the validation record, the
+/// estimation record diagnosed; first diagnosed at stop 74.
+pub(super) fn tanks_arx_swapped(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+) -> anyhow::Result<RealResult> {
+    tanks_arx_on(data, opts, fig, "cascaded_tanks_arx_swapped", ("uVal", "yVal"), ("uEst", "yEst"))
+}
+
+/// The cascaded tanks' ARX(2,2,1), fitted by least squares on the record of columns `fitted`,
+/// run from its first level on the record of columns `diagnosed`, which is diagnosed.
+fn tanks_arx_on(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+    name: &str,
+    fitted: (&str, &str),
+    diagnosed: (&str, &str),
+) -> anyhow::Result<RealResult> {
     let p = data.join("cascaded_tanks/dataBenchmark.csv");
     let (h, c) = read_plain(&p)?;
-    let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
-    let (u, y) = (column(&h, &c, "uVal", &p)?, column(&h, &c, "yVal", &p)?);
-    let s = arx(&ue, &ye, 2, 2, 1, 0..ue.len())?.simulate_from(&[&u], y[0])?;
+    let (uf, yf) = (column(&h, &c, fitted.0, &p)?, column(&h, &c, fitted.1, &p)?);
+    let (u, y) = (column(&h, &c, diagnosed.0, &p)?, column(&h, &c, diagnosed.1, &p)?);
+    let s = arx(&uf, &yf, 2, 2, 1, 0..uf.len())?.simulate_from(&[&u], y[0])?;
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * mpmwatch::tanks::BENCHMARK_TS).collect();
-    real_case(
-        "cascaded_tanks_arx",
-        "linear ARX(2,2,1) fitted on the estimation record, run on the validation record",
-        time,
-        u,
-        y,
-        s,
-        "saturation",
-        None,
-        opts,
-        fig,
-    )
+    let model = format!(
+        "linear ARX(2,2,1) fitted on {}→{}, run on {}→{}",
+        fitted.0, fitted.1, diagnosed.0, diagnosed.1
+    );
+    real_case(name, &model, time, u, y, s, "saturation", None, opts, fig)
 }
 
 #[cfg(test)]
