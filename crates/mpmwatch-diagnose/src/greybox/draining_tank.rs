@@ -104,6 +104,10 @@ impl Element for DrainingTank {
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         map_input(u, i, |x| outflow(x, p[1], p[2]))
     }
+    /// The square-root outflow bends the dynamics with or without the rim.
+    fn idle_is_linear(&self) -> bool {
+        false
+    }
     /// Where the level stands at the rim.
     fn acting(&self, p: &[f64], u: &[&[f64]], i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
         Some(levels(u[i], p[1], p[2]).iter().map(|&h| h >= p[2]).collect())

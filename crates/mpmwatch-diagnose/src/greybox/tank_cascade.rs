@@ -131,6 +131,10 @@ impl Element for TankCascade {
     fn signals(&self, p: &[f64], u: &[&[f64]], i: usize) -> Vec<Vec<f64>> {
         map_input(u, i, |x| signal(x, [p[0], p[2], p[3], p[4]], p[1]))
     }
+    /// The square-root outflow bends the dynamics with or without the rim.
+    fn idle_is_linear(&self) -> bool {
+        false
+    }
     /// Where the upper level stands at the rim.
     fn acting(&self, p: &[f64], u: &[&[f64]], i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
         Some(levels(u[i], p[2], p[3], p[4], p[1]).iter().map(|h| h.0 >= p[3]).collect())

@@ -40,7 +40,10 @@
 //! gate (it lowers a block) does not hide one below it that passes (stop 72). When the winner
 //! is idle, another element of the window can beat its linear part by up to about the
 //! margin (the window plus what the idle one gained by fitting noise), so no other is tried
-//! (docs/diagnose-history.md, stops 47 and 48). When it does not settle, or remembers its
+//! (docs/diagnose-history.md, stops 47 and 48). That holds where an idle element is its
+//! linear part ([`Element::idle_is_linear`]); a tank whose rim is idle still bends the dynamics
+//! with its square-root outflow, a nonlinearity the vocabulary has no class for, and its class
+//! is set aside as a slow one's is (stop 74). When it does not settle, or remembers its
 //! start, its class is set aside and the rule chooses again among the other classes, each
 //! choice held to the same margin, gate and checks ([`walk`]): a slow store can lead as one
 //! class while another explains the record with dynamics the blocks can check (stop 71).
@@ -168,7 +171,7 @@ impl Judge<'_> {
                 let Some(f) = fit(&m, self.d, &self.train_rows) else { return Attempt::Ends };
                 match self.reportable(&m, &f, el.physics(), v, &r.nominal_cv) {
                     Ok(sim) => Attempt::Reported((*i, el, m, f, sim)),
-                    Err(Some(Why::Idle(_))) => Attempt::Ends,
+                    Err(Some(Why::Idle(_))) if el.idle_is_linear() => Attempt::Ends,
                     Err(_) => Attempt::SetAside,
                 }
             },
@@ -516,11 +519,12 @@ enum Attempt<T> {
     /// It passed every check: the finding.
     Reported(T),
     /// Withheld as slower than a block or as remembering its start: another class may
-    /// explain the record with dynamics the blocks can check. A fit that cannot be simulated
-    /// over the record is set aside too, with nothing kept of it.
+    /// explain the record with dynamics the blocks can check. Likewise a tank whose rim is
+    /// idle, and a fit that cannot be simulated over the record (nothing kept of it).
     SetAside,
-    /// Withheld as idle (it is then its linear part, and no other candidate of the parsimony
-    /// window can beat that by the margin, docs/diagnose-history.md, stop 47), or not fitted.
+    /// Withheld as idle where that leaves its linear part (no other candidate of the parsimony
+    /// window can then beat it by the margin, docs/diagnose-history.md, stop 47), or not
+    /// fitted.
     Ends,
 }
 
