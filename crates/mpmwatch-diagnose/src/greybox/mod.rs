@@ -171,10 +171,11 @@ pub trait Element: Sync {
     fn acting(&self, _p: &[f64], _u: &[&[f64]], _i: usize, _yhat: &[f64]) -> Option<Vec<bool>> {
         None
     }
-    /// Whether the element, its kink idle ([`Element::acting`] true on no row), is its linear
-    /// part: a limit or a dead zone beyond the record leaves a line (with a store, a line with
-    /// one pole more). True by default; false for a tank, whose square-root outflow bends the
-    /// dynamics at every level whether or not its rim is reached.
+    /// Whether the element, its kink idle ([`Element::acting`] on too few rows for a name,
+    /// `explain`'s `MIN_ACTING`), is its linear part: a limit or a dead zone beyond the record
+    /// leaves a line (with a store, a line with one pole more). True by default; false for a
+    /// tank, whose square-root outflow bends the dynamics at every level whether or not its rim
+    /// is reached.
     fn idle_is_linear(&self) -> bool {
         true
     }
