@@ -113,18 +113,14 @@ fn by_structures(
         inputs: input.inputs.iter().map(|u| u.name).collect(),
         output: input.outputs[j].name,
     };
-    greybox::explain(
-        &d,
-        s0,
-        &plan.ctxs[cv].model,
-        flagged,
-        &plan.split.folds,
-        opts.warmup,
-        opts.min_gain_pct,
-        opts.drift_min_gain_pct,
-        plan.ts,
-        &names,
-    )
+    let o =
+        greybox::Output { d: &d, s: s0, nominal: &plan.ctxs[cv].model, flagged, names: &names, ts: plan.ts };
+    let margins = greybox::Margins {
+        warmup: opts.warmup,
+        min_gain: opts.min_gain_pct,
+        drift_min_gain: opts.drift_min_gain_pct,
+    };
+    greybox::explain(&o, &plan.split.folds, &margins)
 }
 
 /// Output `j` (testable output `cv`) explained by a correction added to its residual: the

@@ -30,6 +30,22 @@ pub struct DiagnoseInput<'a> {
     pub physical: Vec<Option<&'a dyn PhysicalModel>>,
 }
 
+impl<'a> DiagnoseInput<'a> {
+    /// An open-loop record of one input and one output, with the nominal's simulation of that
+    /// output (under the output's name) and no physical model: the commonest diagnosis, a
+    /// least-squares or first-principles model run over a step or PRBS test.
+    pub fn open_loop(time: &'a [f64], input: Signal<'a>, output: Signal<'a>, simulated: &'a [f64]) -> Self {
+        DiagnoseInput {
+            time,
+            inputs: vec![input],
+            excitations: None,
+            outputs: vec![output],
+            simulated: vec![Signal { name: output.name, values: simulated }],
+            physical: Vec::new(),
+        }
+    }
+}
+
 /// Options of a diagnosis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiagnoseOptions {

@@ -273,14 +273,12 @@ pub fn run_diagnosis(n: usize, seed: u64) -> Result<DiagnoseTiming, DiagnoseBenc
     let case = PhysicalCase::Duffing;
     let r = run(case, n, seed)?;
     let time: Vec<f64> = (0..n).map(|k| k as f64).collect();
-    let input = DiagnoseInput {
-        time: &time,
-        inputs: vec![Signal { name: "u1", values: &r.u }],
-        excitations: None,
-        outputs: vec![Signal { name: "y1", values: &r.y }],
-        simulated: vec![Signal { name: "y1", values: &r.s }],
-        physical: Vec::new(),
-    };
+    let input = DiagnoseInput::open_loop(
+        &time,
+        Signal { name: "u1", values: &r.u },
+        Signal { name: "y1", values: &r.y },
+        &r.s,
+    );
     let opts = DiagnoseOptions::default();
     let timed = || {
         let start = Instant::now();

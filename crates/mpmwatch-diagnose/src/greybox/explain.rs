@@ -76,49 +76,45 @@ pub struct Names<'a> {
     pub output: &'a str,
 }
 
-/// Explains one output. `s` is the nominal simulation, `nominal` the nominal model identified
-/// from it, `flagged` the inputs the localisation implicated, `folds` the blocked folds of the
-/// training rows, `min_gain` the smallest gain in points that counts, `drift_min_gain` the
-/// points of cross-validated FIT a drift term must add to the re-fitted linear model for every
-/// structure to carry one ([`drift_gain`]; open loop only, +∞ never), `ts` the sample time.
+/// One output to explain and what it is explained against.
+pub struct Output<'a> {
+    /// Its record: inputs, output and training rows.
+    pub d: &'a Data<'a>,
+    /// The nominal simulation of it.
+    pub s: &'a [f64],
+    /// The nominal model identified from `s`.
+    pub nominal: &'a NominalArx,
+    /// The inputs the localisation implicated.
+    pub flagged: &'a [usize],
+    /// The names the finding is written in.
+    pub names: &'a Names<'a>,
+    /// The sample time, seconds, in which a dead time is stated.
+    pub ts: f64,
+}
+
+/// The margins the decision is stated in.
+pub struct Margins {
+    /// Training rows, at the start, that no correction is fitted on.
+    pub warmup: usize,
+    /// The smallest gain, in points of cross-validated FIT, that counts (the gate).
+    pub min_gain: f64,
+    /// The points of cross-validated FIT a drift term must add to the re-fitted linear model
+    /// for every structure to carry one ([`drift_gain`]; open loop only, +∞ never).
+    pub drift_min_gain: f64,
+}
+
+/// Explains one output on the blocked `folds` of its training rows.
 ///
 /// In four steps: the reference every hypothesis is scored against (`Reference::of`), every
 /// element scored on every linear order set (`candidates`, which also settles the linear
 /// competitor: the re-fit's orders or the nominal's), then the first of three corrections that
 /// is reported (a named element, a linear change, the instrument's range alone; `Judge`), and
 /// otherwise `unexplained`.
-#[allow(clippy::too_many_arguments)]
-pub fn explain(
-    d: &Data<'_>,
-    s: &[f64],
-    nominal: &NominalArx,
-    flagged: &[usize],
-    folds: &[(Vec<usize>, std::ops::Range<usize>)],
-    warmup: usize,
-    min_gain: f64,
-    drift_min_gain: f64,
-    ts: f64,
-    names: &Names<'_>,
-) -> Explanation {
+pub fn explain(o: &Output<'_>, folds: &[(Vec<usize>, std::ops::Range<usize>)], m: &Margins) -> Explanation {
     let els = elements();
-    let mut reference = Reference::of(d, s, nominal, folds, drift_min_gain);
-    let (order_sets, scored) = candidates(d, &mut reference, &els, flagged);
-    let block = reference.folds.iter().map(|f| f.1.len()).min().unwrap_or(0) as f64;
-    let mut judge = Judge {
-        d,
-        s,
-        nominal,
-        flagged,
-        names,
-        ts,
-        min_gain,
-        els: &els,
-        tried: tried(&scored, &els, &reference.nominal_cv),
-        train_rows: (d.train.start + warmup..d.train.end).collect(),
-        block,
-        withheld: Vec::new(),
-        reference: &reference,
-    };
+    let mut reference = Reference::of(o.d, o.s, o.nominal, folds, m.drift_min_gain);
+    let (order_sets, scored) = candidates(o.d, &mut reference, &els, o.flagged);
+    let mut judge = Judge::new(o, m, &els, &scored, &reference);
     if let Some(e) = judge.element(&scored, &order_sets) {
         return e;
     }
@@ -303,7 +299,7 @@ fn candidates(
 
 /// Each physics class tried, with the best mean gain over the nominal any of its candidates
 /// reached.
-fn tried(scored: &[Scored], els: &[Box<dyn Element>], nominal_cv: &CvScore) -> Vec<Tried> {
+pub(super) fn tried(scored: &[Scored], els: &[Box<dyn Element>], nominal_cv: &CvScore) -> Vec<Tried> {
     let mut tried: Vec<Tried> = Vec::new();
     for (v, k, _, _, _) in scored {
         let (gain, ph) = (v.mean - nominal_cv.mean, els[*k].physics());
@@ -405,7 +401,8 @@ mod tests {
             .collect();
         let names = Names { inputs: vec!["u"], output: "y" };
         let d = Data { u: vec![u], y, train, nominal: Some(&s), noise_order: 0 };
-        explain(&d, &s, &model, &[0], &folds, 0, 0.5, 1.0, 1.0, &names)
+        let o = Output { d: &d, s: &s, nominal: &model, flagged: &[0], names: &names, ts: 1.0 };
+        explain(&o, &folds, &Margins { warmup: 0, min_gain: 0.5, drift_min_gain: 1.0 })
     }
 
     /// The settling rule, both ways. A noise-free first-order plant of unit gain on a

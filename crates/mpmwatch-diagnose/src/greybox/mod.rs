@@ -734,7 +734,7 @@ pub use cv::{
     Beside, CvScore, cv_fit, drift_gain, drift_is_one_line, linear_orders, max_dead_time, nominal_cv_fit,
     ranked_linear, starting_at,
 };
-pub use explain::{Explanation, MIN_ACTING, Names, explain};
+pub use explain::{Explanation, MIN_ACTING, Margins, Names, Output, explain};
 pub use linear::Linear;
 pub use structure::{FittedGreyBox, GreyBox, Structure};
 

@@ -236,12 +236,13 @@ fn tanks_state_test_seeds() {
     let mut hits = 0;
     for seed in 1..=seeds {
         let input = DiagnoseInput {
-            time: &time,
-            inputs: vec![Signal { name: "u", values: &u }],
-            excitations: None,
-            outputs: vec![Signal { name: "y", values: &y }],
-            simulated: vec![Signal { name: "y", values: &s }],
             physical: vec![Some(&record)],
+            ..DiagnoseInput::open_loop(
+                &time,
+                Signal { name: "u", values: &u },
+                Signal { name: "y", values: &y },
+                &s,
+            )
         };
         let opts = mpmwatch::tanks::benchmark_options(&DiagnoseOptions { seed, ..Default::default() });
         let d = mpmwatch_diagnose::diagnose(&input, &opts).unwrap();

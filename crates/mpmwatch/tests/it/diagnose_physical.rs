@@ -60,12 +60,13 @@ fn run(y: &[f64], u: &[f64], record: &TanksRecord) -> mpmwatch_diagnose::Diagnos
     let time: Vec<f64> = (0..N).map(|k| k as f64 * TS).collect();
     let s = record.simulate();
     let input = DiagnoseInput {
-        time: &time,
-        inputs: vec![Signal { name: "pump", values: u }],
-        excitations: None,
-        outputs: vec![Signal { name: "level", values: y }],
-        simulated: vec![Signal { name: "level", values: &s }],
         physical: vec![Some(record)],
+        ..DiagnoseInput::open_loop(
+            &time,
+            Signal { name: "pump", values: u },
+            Signal { name: "level", values: y },
+            &s,
+        )
     };
     diagnose(&input, &DiagnoseOptions::default()).unwrap()
 }

@@ -25,14 +25,12 @@ fn silverbox_cubic_stiffness_is_named_and_the_held_out_fit_rises() {
     // Diagnosed on the last 10 000 samples of the arrow (the largest amplitudes).
     let w = 30_000..40_000;
     let time: Vec<f64> = (0..w.len()).map(|k| k as f64 / 610.35).collect();
-    let input = DiagnoseInput {
-        time: &time,
-        inputs: vec![Signal { name: "u", values: &u[w.clone()] }],
-        excitations: None,
-        outputs: vec![Signal { name: "y", values: &y[w.clone()] }],
-        simulated: vec![Signal { name: "y", values: &s[w] }],
-        physical: Vec::new(),
-    };
+    let input = DiagnoseInput::open_loop(
+        &time,
+        Signal { name: "u", values: &u[w.clone()] },
+        Signal { name: "y", values: &y[w.clone()] },
+        &s[w],
+    );
     let d = diagnose(&input, &DiagnoseOptions::default()).unwrap();
     let f = d.report.findings.first().expect("a finding on the Silverbox");
     assert_eq!(f.physics, Physics::Cubic, "{}", f.summary);
@@ -57,12 +55,13 @@ fn cascaded_tanks_upper_tank_overflow_is_named_and_the_held_out_fit_rises() {
     let y: Vec<f64> = ye.iter().chain(yv).copied().collect();
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 4.0).collect();
     let input = DiagnoseInput {
-        time: &time,
-        inputs: vec![Signal { name: "u", values: &u }],
-        excitations: None,
-        outputs: vec![Signal { name: "y", values: &y }],
-        simulated: vec![Signal { name: "y", values: &s }],
         physical: vec![Some(&record)],
+        ..DiagnoseInput::open_loop(
+            &time,
+            Signal { name: "u", values: &u },
+            Signal { name: "y", values: &y },
+            &s,
+        )
     };
     let d = diagnose(&input, &benchmark_options(&DiagnoseOptions::default())).unwrap();
     let f = d.report.findings.first().expect("a finding on the cascaded tanks");
@@ -90,14 +89,12 @@ fn the_drives_other_experiments_name_the_direction_blind_sensor() {
     {
         let s = nominal.simulate_from(&[u], y[0]).unwrap();
         let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * 0.02).collect();
-        let input = DiagnoseInput {
-            time: &time,
-            inputs: vec![Signal { name: "u", values: u }],
-            excitations: None,
-            outputs: vec![Signal { name: "y", values: y }],
-            simulated: vec![Signal { name: "y", values: &s }],
-            physical: Vec::new(),
-        };
+        let input = DiagnoseInput::open_loop(
+            &time,
+            Signal { name: "u", values: u },
+            Signal { name: "y", values: y },
+            &s,
+        );
         let d = diagnose(&input, &DiagnoseOptions::default()).unwrap();
         let f = d.report.findings.first().unwrap_or_else(|| panic!("{label}: no finding"));
         assert_eq!(f.physics, Physics::AbsSensor, "{label}: {}", f.summary);

@@ -209,14 +209,12 @@ fn bad_input_names_the_culprit() {
     assert!(e.contains("y1") && e.contains("NaN") && e.contains("sim3.csv"), "{e}");
     // The library names the series too.
     let t: Vec<f64> = (0..400).map(|k| k as f64).collect();
-    let input = DiagnoseInput {
-        time: &t,
-        inputs: vec![Signal { name: "u1", values: &x }],
-        excitations: None,
-        outputs: vec![Signal { name: "y1", values: &x }],
-        simulated: vec![Signal { name: "y1", values: &nan }],
-        physical: Vec::new(),
-    };
+    let input = DiagnoseInput::open_loop(
+        &t,
+        Signal { name: "u1", values: &x },
+        Signal { name: "y1", values: &x },
+        &nan,
+    );
     match diagnose(&input, &DiagnoseOptions::default()) {
         Err(DiagnoseError::NotFinite { name, index, .. }) => assert_eq!((name.as_str(), index), ("y1", 17)),
         other => panic!("{other:?}"),

@@ -57,7 +57,7 @@ use std::collections::BTreeMap;
 use super::super::clip_sensor::ClipSensor;
 use super::super::linear_change::{at_the_bound, changed_most, linear_change};
 use super::super::{CvScore, Data, Element, Fitted, Linear, Model, Orders, cv_fit, fit, ranked_linear};
-use super::{Explanation, Names, Reference, Scored};
+use super::{Explanation, Margins, Names, Output, Reference, Scored, tried};
 use crate::candidates::{ActsOn, Physics};
 use crate::nominal::NominalArx;
 use crate::report::{Finding, Tried};
@@ -87,24 +87,53 @@ pub const PARSIMONY: f64 = 0.5;
 /// that passes every test reported, each that passed the gate and was not reported kept with
 /// its reason for the `unexplained` finding.
 pub(super) struct Judge<'a> {
-    pub(super) d: &'a Data<'a>,
+    d: &'a Data<'a>,
     /// The nominal simulation.
-    pub(super) s: &'a [f64],
-    pub(super) nominal: &'a NominalArx,
-    pub(super) flagged: &'a [usize],
-    pub(super) names: &'a Names<'a>,
-    pub(super) ts: f64,
-    pub(super) min_gain: f64,
-    pub(super) els: &'a [Box<dyn Element>],
-    pub(super) reference: &'a Reference,
+    s: &'a [f64],
+    nominal: &'a NominalArx,
+    flagged: &'a [usize],
+    names: &'a Names<'a>,
+    ts: f64,
+    min_gain: f64,
+    els: &'a [Box<dyn Element>],
+    reference: &'a Reference,
     /// Each class tried and its best gain, for the finding.
-    pub(super) tried: Vec<Tried>,
+    tried: Vec<Tried>,
     /// The training rows a correction is fitted on.
-    pub(super) train_rows: Vec<usize>,
+    train_rows: Vec<usize>,
     /// The shortest validation block, samples.
-    pub(super) block: f64,
+    block: f64,
     /// Each correction that passed the gate and was not reported, in the order tried.
-    pub(super) withheld: Vec<Withheld>,
+    withheld: Vec<Withheld>,
+}
+
+impl<'a> Judge<'a> {
+    /// The decision for output `o` under margins `m`, with the classes `els`, their `scored`
+    /// candidates and the `reference` they were scored against.
+    pub(super) fn new(
+        o: &Output<'a>,
+        m: &Margins,
+        els: &'a [Box<dyn Element>],
+        scored: &[Scored],
+        reference: &'a Reference,
+    ) -> Self {
+        let d = o.d;
+        Judge {
+            d,
+            s: o.s,
+            nominal: o.nominal,
+            flagged: o.flagged,
+            names: o.names,
+            ts: o.ts,
+            min_gain: m.min_gain,
+            els,
+            reference,
+            tried: tried(scored, els, &reference.nominal_cv),
+            train_rows: (d.train.start + m.warmup..d.train.end).collect(),
+            block: reference.folds.iter().map(|f| f.1.len()).min().unwrap_or(0) as f64,
+            withheld: Vec::new(),
+        }
+    }
 }
 
 impl Judge<'_> {

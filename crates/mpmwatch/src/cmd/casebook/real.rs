@@ -93,12 +93,13 @@ fn real_case(
     fig: &Path,
 ) -> anyhow::Result<RealResult> {
     let input = DiagnoseInput {
-        time: &time,
-        inputs: vec![Signal { name: "u", values: &u }],
-        excitations: None,
-        outputs: vec![Signal { name: "y", values: &y }],
-        simulated: vec![Signal { name: "y", values: &s }],
         physical: vec![physical],
+        ..DiagnoseInput::open_loop(
+            &time,
+            Signal { name: "u", values: &u },
+            Signal { name: "y", values: &y },
+            &s,
+        )
     };
     let dg = mpmwatch_diagnose::diagnose(&input, opts)?;
     crate::cmd::diagnose::output_figure(
