@@ -213,14 +213,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ("silverbox", real::silverbox as real::RealCase),
             ("ced", real::ced),
             ("tclab", real::tclab),
-            ("cascaded_tanks", real::tanks),
-            ("cascaded_tanks_arx", real::tanks_arx),
+            ("cascaded_tanks", real::cascaded_tanks),
+            ("cascaded_tanks_arx", real::cascaded_tanks_arx),
             ("silverbox_multisine", real::silverbox_multisine),
-            ("ced_u2z2", real::ced_prbs_large),
-            ("ced_u3z3", real::ced_prbs_small),
-            ("ced_u11z11", real::ced_uniform),
-            ("tclab_t2", real::tclab_neighbour),
-            ("cascaded_tanks_arx_swapped", real::tanks_arx_swapped),
+            ("ced_u2z2", real::ced_u2z2),
+            ("ced_u3z3", real::ced_u3z3),
+            ("ced_u11z11", real::ced_u11z11),
+            ("tclab_t2", real::tclab_t2),
+            ("cascaded_tanks_arx_swapped", real::cascaded_tanks_arx_swapped),
         ] {
             eprintln!("real recording: {name}");
             match f(&args.data, &opts, &fig) {

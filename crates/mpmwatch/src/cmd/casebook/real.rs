@@ -209,19 +209,19 @@ pub(super) fn ced(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Re
 
 /// The drives' PRBS ±1.5 experiment (`u2 → z2`) against the same calibrated ARX(3,3): first
 /// diagnosed at stop 74.
-pub(super) fn ced_prbs_large(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+pub(super) fn ced_u2z2(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     ced_on(data, opts, fig, "ced_u2z2", "DATAPRBS.csv", "u2", "z2")
 }
 
 /// The drives' PRBS ±0.5 experiment (`u3 → z3`) against the same calibrated ARX(3,3): first
 /// diagnosed at stop 74.
-pub(super) fn ced_prbs_small(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+pub(super) fn ced_u3z3(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     ced_on(data, opts, fig, "ced_u3z3", "DATAPRBS.csv", "u3", "z3")
 }
 
 /// The drives' first uniform-input experiment (`u11 → z11`, the speed changing sign) against
 /// the ARX(3,3) calibrated on the second: first diagnosed at stop 74.
-pub(super) fn ced_uniform(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+pub(super) fn ced_u11z11(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     ced_on(data, opts, fig, "ced_u11z11", "DATAUNIF.csv", "u11", "z11")
 }
 
@@ -267,7 +267,7 @@ pub(super) fn tclab(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::
 
 /// The same sine test read at the neighbouring sensor, temperature 2, which heater 1 warms
 /// through the board: first diagnosed at stop 74.
-pub(super) fn tclab_neighbour(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+pub(super) fn tclab_t2(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     tclab_on(data, opts, fig, "tclab_t2", "T2")
 }
 
@@ -290,7 +290,7 @@ fn tclab_on(
 
 /// Cascaded tanks: a Torricelli two-tank simulation without overflow, calibrated on the
 /// estimation record's samples below the overflow level.
-pub(super) fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+pub(super) fn cascaded_tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
     let p = data.join("cascaded_tanks/dataBenchmark.csv");
     let (h, c) = read_plain(&p)?;
     let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
@@ -321,13 +321,17 @@ pub(super) fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::
 /// physical model): an ARX(2,2,1) fitted by least squares on the estimation record, run on the
 /// validation record from its first level, which is diagnosed with the casebook's settings
 /// (the last 30 % held out).
-pub(super) fn tanks_arx(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+pub(super) fn cascaded_tanks_arx(
+    data: &Path,
+    opts: &DiagnoseOptions,
+    fig: &Path,
+) -> anyhow::Result<RealResult> {
     tanks_arx_on(data, opts, fig, "cascaded_tanks_arx", ("uEst", "yEst"), ("uVal", "yVal"))
 }
 
 /// The same with the records' roles swapped: the ARX fitted on the validation record, the
 /// estimation record diagnosed; first diagnosed at stop 74.
-pub(super) fn tanks_arx_swapped(
+pub(super) fn cascaded_tanks_arx_swapped(
     data: &Path,
     opts: &DiagnoseOptions,
     fig: &Path,
