@@ -315,6 +315,28 @@ fn sample_time(time: &[f64]) -> Result<f64, DiagnoseError> {
 mod tests {
     use super::*;
 
+    /// The one-input, one-output record is an open-loop one: its excitation is the input
+    /// itself, its simulation carries the output's name, and it holds no physical model; a
+    /// simulation of another length is refused as any record's would be.
+    #[test]
+    fn an_open_loop_record_excites_with_its_input() {
+        let time: Vec<f64> = (0..400).map(|t| 0.5 * f64::from(t)).collect();
+        let (u, y): (Vec<f64>, Vec<f64>) = (0..400).map(|t| (f64::from(t % 7), f64::from(t % 5))).unzip();
+        let (u_sig, y_sig) = (Signal { name: "u", values: &u }, Signal { name: "y", values: &y });
+        let s: Vec<f64> = (0..400).map(|t| f64::from(t % 3)).collect();
+        let input = DiagnoseInput::open_loop(&time, u_sig, y_sig, &s);
+        assert_eq!(input.simulated[0].name, "y");
+        assert!(input.excitations.is_none() && input.physical.is_empty());
+        let checked = validate(&input, &DiagnoseOptions::default()).expect("a valid record");
+        assert_eq!(checked.exc.len(), 1);
+        assert_eq!(checked.exc[0].values, &u[..]);
+        assert_eq!(checked.ts, 0.5);
+        assert_eq!(checked.n_train, 280, "the default 30 % held out of 400 samples");
+        let short = vec![0.0; 399];
+        let input = DiagnoseInput::open_loop(&time, u_sig, y_sig, &short);
+        assert!(validate(&input, &DiagnoseOptions::default()).is_err());
+    }
+
     /// Each setting out of its range is refused with an error naming it, before anything is
     /// fitted.
     #[test]

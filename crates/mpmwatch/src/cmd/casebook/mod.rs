@@ -209,21 +209,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut accuracy = Vec::new();
     if !args.simulated_only {
         md.push_str("## Real recordings\n\n| recording | simulation | channel | physics named | parameters | held-out FIT before → after | figure |\n| --- | --- | --- | --- | --- | --- | --- |\n");
-        for (name, f) in [
-            ("silverbox", real::silverbox as real::RealCase),
-            ("ced", real::ced),
-            ("tclab", real::tclab),
-            ("cascaded_tanks", real::cascaded_tanks),
-            ("cascaded_tanks_arx", real::cascaded_tanks_arx),
-            ("silverbox_multisine", real::silverbox_multisine),
-            ("ced_u2z2", real::ced_u2z2),
-            ("ced_u3z3", real::ced_u3z3),
-            ("ced_u11z11", real::ced_u11z11),
-            ("tclab_t2", real::tclab_t2),
-            ("cascaded_tanks_arx_swapped", real::cascaded_tanks_arx_swapped),
-        ] {
+        for (name, row) in &real::ROWS {
             eprintln!("real recording: {name}");
-            match f(&args.data, &opts, &fig) {
+            match real::run(name, row, &args.data, &opts, &fig) {
                 Ok(r) => {
                     md.push_str(&r.row);
                     real.push(r.json);

@@ -15,8 +15,6 @@ pub(super) struct RealResult {
     pub(super) json: serde_json::Value,
 }
 
-pub(super) type RealCase = fn(&Path, &DiagnoseOptions, &Path) -> anyhow::Result<RealResult>;
-
 /// Reads a headered CSV without a time column (the benchmark files); empty cells are NaN.
 pub(super) fn read_plain(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
     let text = std::fs::read_to_string(path).with_context(|| {
@@ -143,28 +141,74 @@ fn real_case(
     })
 }
 
-/// Silverbox, the arrow-head part of SNLS80mV (samples 0..40 000, amplitude growing): a linear
-/// ARX(2,3) fitted on the low-amplitude samples 2 000..10 000, simulated over the whole arrow,
-/// diagnosed on its last 10 000 samples (the largest amplitudes, where the cubic term shows).
-pub(super) fn silverbox(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    silverbox_window(data, opts, fig, "silverbox", 30_000..40_000)
+/// One real row of the casebook: a record of the shared data and the nominal a user would give
+/// it. Each row's name ([`ROWS`]) is its table key, its JSON `recording` and its figures' stem.
+pub(super) enum Row {
+    /// A window of SNLS80mV (rows), against a linear ARX(2,3) fitted on the arrow head's low
+    /// amplitudes, samples 2 000..10 000, simulated from the record's start.
+    Silverbox(std::ops::Range<usize>),
+    /// One experiment of the coupled drives (file, input and speed columns) against a linear
+    /// ARX(3,3) calibrated on `u12 → z12` of DATAUNIF.csv (input mostly positive, so the speed
+    /// seldom changes sign and the |·| sensor hardly matters there), simulated from the
+    /// experiment's first speed.
+    Ced { file: &'static str, u: &'static str, y: &'static str },
+    /// The TCLab sine test (heater 1 swept 0–100 %, period 5 min) against one temperature
+    /// column, with a linear first-order ARX(1,1) (one sample of dead time) fitted on the
+    /// record's first 70 % (the training part).
+    Tclab { y: &'static str },
+    /// The cascaded tanks as one record (estimation, then validation) against a Torricelli
+    /// two-tank simulation without overflow, calibrated below the overflow level and handed to
+    /// `diagnose` as a physical model, so that it can re-run the model with a tank overflowing.
+    Tanks,
+    /// The cascaded tanks as a user with a linear model meets them, through the CSV verb's path
+    /// (no physical model): an ARX(2,2,1) fitted by least squares on the `fitted` record's
+    /// (input, level) columns, run from its first level on the `diagnosed` record's.
+    TanksArx { fitted: (&'static str, &'static str), diagnosed: (&'static str, &'static str) },
 }
 
-/// Silverbox, the odd multisine that follows the arrow head in SNLS80mV, samples 60 000..70 000,
-/// against the same ARX(2,3) fitted on the arrow's low amplitudes: another experiment on the
-/// same circuit, first diagnosed at stop 74 (docs/diagnose-history.md).
-pub(super) fn silverbox_multisine(
+/// The real rows, in the casebook's order. The rows after `cascaded_tanks_arx` are other
+/// experiments on the same systems, first diagnosed at stop 74 (docs/diagnose-history.md).
+pub(super) const ROWS: [(&str, Row); 11] = [
+    // The arrow head's last 10 000 samples, its largest amplitudes, where the cubic term shows.
+    ("silverbox", Row::Silverbox(30_000..40_000)),
+    // The PRBS ±1 experiment, where the speed changes sign.
+    ("ced", Row::Ced { file: "DATAPRBS.csv", u: "u1", y: "z1" }),
+    ("tclab", Row::Tclab { y: "T1" }),
+    ("cascaded_tanks", Row::Tanks),
+    ("cascaded_tanks_arx", Row::TanksArx { fitted: ("uEst", "yEst"), diagnosed: ("uVal", "yVal") }),
+    // The odd multisine that follows the arrow head.
+    ("silverbox_multisine", Row::Silverbox(60_000..70_000)),
+    // PRBS ±1.5.
+    ("ced_u2z2", Row::Ced { file: "DATAPRBS.csv", u: "u2", y: "z2" }),
+    // PRBS ±0.5.
+    ("ced_u3z3", Row::Ced { file: "DATAPRBS.csv", u: "u3", y: "z3" }),
+    // The first uniform-input experiment, the speed changing sign.
+    ("ced_u11z11", Row::Ced { file: "DATAUNIF.csv", u: "u11", y: "z11" }),
+    // The neighbouring sensor, which heater 1 warms through the board.
+    ("tclab_t2", Row::Tclab { y: "T2" }),
+    // The records' roles swapped.
+    ("cascaded_tanks_arx_swapped", Row::TanksArx { fitted: ("uVal", "yVal"), diagnosed: ("uEst", "yEst") }),
+];
+
+/// Real row `row`, named `name`: its record read, its nominal built, diagnosed.
+pub(super) fn run(
+    name: &str,
+    row: &Row,
     data: &Path,
     opts: &DiagnoseOptions,
     fig: &Path,
 ) -> anyhow::Result<RealResult> {
-    silverbox_window(data, opts, fig, "silverbox_multisine", 60_000..70_000)
+    match row {
+        Row::Silverbox(w) => silverbox(data, opts, fig, name, w.clone()),
+        Row::Ced { file, u, y } => ced(data, opts, fig, name, file, u, y),
+        Row::Tclab { y } => tclab(data, opts, fig, name, y),
+        Row::Tanks => tanks(data, opts, fig, name),
+        Row::TanksArx { fitted, diagnosed } => tanks_arx(data, opts, fig, name, *fitted, *diagnosed),
+    }
 }
 
-/// The Silverbox's linear ARX(2,3), fitted on SNLS80mV's samples 2 000..10 000 (the arrow
-/// head's low amplitudes), simulated from the record's start up to the end of window `w`, which
-/// is diagnosed.
-fn silverbox_window(
+/// [`Row::Silverbox`]: the diagnosed window `w`.
+fn silverbox(
     data: &Path,
     opts: &DiagnoseOptions,
     fig: &Path,
@@ -199,36 +243,8 @@ fn silverbox_window(
     )
 }
 
-/// Coupled electric drives: a linear ARX(3,3) model of the belt speed, calibrated on the
-/// uniform-input experiment's second record (`u12 → z12`, input mostly positive, so the speed
-/// seldom changes sign and the |·| sensor hardly matters there), simulated on the PRBS ±1
-/// experiment (`u1 → z1`), where the speed does change sign.
-pub(super) fn ced(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    ced_on(data, opts, fig, "ced", "DATAPRBS.csv", "u1", "z1")
-}
-
-/// The drives' PRBS ±1.5 experiment (`u2 → z2`) against the same calibrated ARX(3,3): first
-/// diagnosed at stop 74.
-pub(super) fn ced_u2z2(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    ced_on(data, opts, fig, "ced_u2z2", "DATAPRBS.csv", "u2", "z2")
-}
-
-/// The drives' PRBS ±0.5 experiment (`u3 → z3`) against the same calibrated ARX(3,3): first
-/// diagnosed at stop 74.
-pub(super) fn ced_u3z3(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    ced_on(data, opts, fig, "ced_u3z3", "DATAPRBS.csv", "u3", "z3")
-}
-
-/// The drives' first uniform-input experiment (`u11 → z11`, the speed changing sign) against
-/// the ARX(3,3) calibrated on the second: first diagnosed at stop 74.
-pub(super) fn ced_u11z11(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    ced_on(data, opts, fig, "ced_u11z11", "DATAUNIF.csv", "u11", "z11")
-}
-
-/// One experiment of the coupled drives (`file`, columns `uc → yc`) against the linear
-/// ARX(3,3) calibrated on `u12 → z12` of DATAUNIF.csv, simulated from the experiment's first
-/// speed.
-fn ced_on(
+/// [`Row::Ced`]: columns `uc → yc` of `file`.
+fn ced(
     data: &Path,
     opts: &DiagnoseOptions,
     fig: &Path,
@@ -259,21 +275,8 @@ fn ced_on(
     )
 }
 
-/// TCLab sine test (heater 1 swept sinusoidally 0–100 %, period 5 min): temperature 1 against a
-/// linear first-order ARX(1,1) model fitted on the first 70 % (the training part).
-pub(super) fn tclab(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    tclab_on(data, opts, fig, "tclab", "T1")
-}
-
-/// The same sine test read at the neighbouring sensor, temperature 2, which heater 1 warms
-/// through the board: first diagnosed at stop 74.
-pub(super) fn tclab_t2(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
-    tclab_on(data, opts, fig, "tclab_t2", "T2")
-}
-
-/// The TCLab sine test's heater 1 against temperature column `yc`, with a linear first-order
-/// ARX(1,1) (one sample of dead time) fitted on the record's first 70 %.
-fn tclab_on(
+/// [`Row::Tclab`]: heater 1 against temperature column `yc`.
+fn tclab(
     data: &Path,
     opts: &DiagnoseOptions,
     fig: &Path,
@@ -288,15 +291,12 @@ fn tclab_on(
     real_case(name, "linear first-order ARX(1,1)", time, u, y, s, "say what it finds", None, opts, fig)
 }
 
-/// Cascaded tanks: a Torricelli two-tank simulation without overflow, calibrated on the
-/// estimation record's samples below the overflow level.
-pub(super) fn cascaded_tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) -> anyhow::Result<RealResult> {
+/// [`Row::Tanks`].
+fn tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path, name: &str) -> anyhow::Result<RealResult> {
     let p = data.join("cascaded_tanks/dataBenchmark.csv");
     let (h, c) = read_plain(&p)?;
     let (ue, ye) = (column(&h, &c, "uEst", &p)?, column(&h, &c, "yEst", &p)?);
     let (uv, yv) = (column(&h, &c, "uVal", &p)?, column(&h, &c, "yVal", &p)?);
-    // The simulation handed to `diagnose` is the model's own, so that it can re-run the model
-    // with a tank overflowing.
     let record = mpmwatch::tanks::benchmark_record(&ue, &ye, &uv, &yv);
     let s = mpmwatch_diagnose::PhysicalModel::simulate(&record);
     let u: Vec<f64> = ue.iter().chain(&uv).copied().collect();
@@ -304,7 +304,7 @@ pub(super) fn cascaded_tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) ->
     let time: Vec<f64> = (0..u.len()).map(|k| k as f64 * record.ts).collect();
     let opts = mpmwatch::tanks::benchmark_options(opts);
     real_case(
-        "cascaded_tanks",
+        name,
         "Torricelli two tanks, no overflow (the model itself handed to `diagnose`)",
         time,
         u,
@@ -317,31 +317,8 @@ pub(super) fn cascaded_tanks(data: &Path, opts: &DiagnoseOptions, fig: &Path) ->
     )
 }
 
-/// Cascaded tanks as a user with a linear model meets them, through the CSV verb's path (no
-/// physical model): an ARX(2,2,1) fitted by least squares on the estimation record, run on the
-/// validation record from its first level, which is diagnosed with the casebook's settings
-/// (the last 30 % held out).
-pub(super) fn cascaded_tanks_arx(
-    data: &Path,
-    opts: &DiagnoseOptions,
-    fig: &Path,
-) -> anyhow::Result<RealResult> {
-    tanks_arx_on(data, opts, fig, "cascaded_tanks_arx", ("uEst", "yEst"), ("uVal", "yVal"))
-}
-
-/// The same with the records' roles swapped: the ARX fitted on the validation record, the
-/// estimation record diagnosed; first diagnosed at stop 74.
-pub(super) fn cascaded_tanks_arx_swapped(
-    data: &Path,
-    opts: &DiagnoseOptions,
-    fig: &Path,
-) -> anyhow::Result<RealResult> {
-    tanks_arx_on(data, opts, fig, "cascaded_tanks_arx_swapped", ("uVal", "yVal"), ("uEst", "yEst"))
-}
-
-/// The cascaded tanks' ARX(2,2,1), fitted by least squares on the record of columns `fitted`,
-/// run from its first level on the record of columns `diagnosed`, which is diagnosed.
-fn tanks_arx_on(
+/// [`Row::TanksArx`], diagnosed with the casebook's settings (the last 30 % held out).
+fn tanks_arx(
     data: &Path,
     opts: &DiagnoseOptions,
     fig: &Path,
