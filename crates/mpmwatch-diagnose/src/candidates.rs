@@ -274,8 +274,8 @@ pub struct OutputCtx {
     pub ut: Vec<Vec<f64>>,
     /// The operating points.
     pub u0: Vec<f64>,
-    /// Per input, the range of `ut` over the training rows: the polynomial terms hold their
-    /// powers at its edges (see [`OutputCtx::columns`]).
+    /// Per input, the range of `ut` over the training rows: beyond it the polynomial terms'
+    /// powers go on along their tangent at its edges (see [`OutputCtx::columns`]).
     pub u_range: Vec<(f64, f64)>,
     /// Nominal simulation of this output.
     pub s: Vec<f64>,
@@ -365,13 +365,13 @@ impl OutputCtx {
                 vec![in_front(u.iter().map(|v| v.clamp(*lo, *hi) - v).collect())]
             }
             Term::SaturationOut { lo, hi } => vec![self.s.iter().map(|v| v.clamp(*lo, *hi) - v).collect()],
-            // A polynomial fitted on the training range is not known beyond it, and extrapolated
-            // it grows without bound: the powers hold their value at the range's edges (the
-            // linear part, the channel's own response, still follows the input).
+            // The grey-box polynomial's rule ([`crate::greybox::power`]): the powers go on along
+            // their tangent beyond the training range, known only within it.
             Term::Quadratic | Term::Cubic => {
                 let (lo, hi) = self.u_range.get(i).copied().unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-                let held: Vec<f64> = u.iter().map(|v| if lo <= hi { v.clamp(lo, hi) } else { *v }).collect();
-                let power = |k: i32| g0(&held.iter().map(|v| v.powi(k)).collect::<Vec<_>>());
+                let p = [0.0, 1.0, lo, hi];
+                let power =
+                    |k: i32| g0(&u.iter().map(|&v| crate::greybox::power(&p, v, k)).collect::<Vec<_>>());
                 let mut cols =
                     if matches!(term, Term::Cubic) { vec![power(3), power(2)] } else { vec![power(2)] };
                 cols.push(self.s_channel[i].clone());
@@ -611,12 +611,13 @@ mod tests {
         assert_eq!(Term::MissingCoupling { pole: 0.5, delay: 2 }.with_continuous(&[1.0]), None);
     }
 
-    /// The polynomial terms hold their powers beyond the training range: a record whose tail
-    /// leaves that range gives the same power columns as the record with its tail held at the
-    /// range's edges (same arithmetic, so 1e-12), while the linear column still follows the
-    /// input.
+    /// The polynomial terms continue their powers along the tangent beyond the training range,
+    /// as the grey-box polynomial does: on a record whose tail leaves that range, each power
+    /// column is the channel's response to `z_e^k + k z_e^(k−1) (z − z_e)` (`z_e` the input held
+    /// at the range's edge), built here by hand and compared at 1e-12 (the same arithmetic, one
+    /// linear filter); the linear column still follows the input itself.
     #[test]
-    fn polynomial_columns_hold_beyond_the_training_range() {
+    fn polynomial_columns_go_on_along_their_tangent_beyond_the_training_range() {
         let n = 600;
         let u: Vec<f64> =
             (0..n).map(|t| ((t / 7 * 7919) % 23) as f64 / 10.0 + if t >= 400 { 3.0 } else { 0.0 }).collect();
@@ -632,24 +633,23 @@ mod tests {
             closed_loop: false,
             whiten: 0,
         };
-        let (lo, hi) =
-            u[20..400].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-        let held: Vec<f64> =
-            u.iter().enumerate().map(|(t, &v)| if t >= 400 { v.clamp(lo, hi) } else { v }).collect();
         let ctx = crate::plan::output_ctx(&[&u], &s, &split);
-        let ctx_held = crate::plan::output_ctx(&[&held], &s, &split);
+        let (lo, hi) = ctx.u_range[0];
+        assert!(ctx.ut[0][400..].iter().all(|&z| z > hi + 0.5), "the tail must leave the range");
+        let tangent = |z: f64, k: i32| {
+            let ze = z.clamp(lo, hi);
+            ze.powi(k) + f64::from(k) * ze.powi(k - 1) * (z - ze)
+        };
         for term in [Term::Quadratic, Term::Cubic] {
-            let (a, b) = (ctx.columns(0, &term), ctx_held.columns(0, &term));
-            let powers = a.len() - 1;
-            for k in 0..powers {
-                let worst = a[k].iter().zip(&b[k]).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-                assert!(worst < 1e-12, "{term:?} column {k}: {worst}");
+            let cols = ctx.columns(0, &term);
+            let powers: Vec<i32> = if matches!(term, Term::Cubic) { vec![3, 2] } else { vec![2] };
+            for (col, &k) in cols.iter().zip(&powers) {
+                let want =
+                    ctx.model.channel(0, &ctx.ut[0].iter().map(|&z| tangent(z, k)).collect::<Vec<_>>());
+                let worst = col.iter().zip(&want).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(worst < 1e-12, "{term:?} power {k}: {worst}");
             }
-            let linear_gap = a[powers][450] - b[powers][450];
-            assert!(
-                linear_gap.abs() > 1.0,
-                "{term:?}: the linear column should follow the input ({linear_gap})"
-            );
+            assert_eq!(cols[powers.len()], ctx.s_channel[0], "{term:?}: the linear column");
         }
     }
 

@@ -111,7 +111,7 @@ pub fn describe(
             };
             p.insert("centre".into(), c);
             format!(
-                "{output} responds to the {what} of {input}'s move: an extra {}·({input} − {}){power} through the channel's dynamics, fitted for {input} in [{}, {}] and held at that range's edges beyond it",
+                "{output} responds to the {what} of {input}'s move: an extra {}·({input} − {}){power} through the channel's dynamics, fitted for {input} in [{}, {}] and continued along its tangent beyond it",
                 num(th),
                 num(c),
                 num(lo),

@@ -736,6 +736,7 @@ pub use cv::{
 };
 pub use explain::{Explanation, MIN_ACTING, Margins, Names, Output, explain};
 pub use linear::Linear;
+pub(crate) use polynomial::power;
 pub use structure::{FittedGreyBox, GreyBox, Structure};
 
 #[cfg(test)]

@@ -53,7 +53,7 @@ pub(super) fn standardised(p: &[f64], v: f64) -> f64 {
 /// the range its power, beyond it the power at the edge plus the tangent's slope there times
 /// the distance past the edge, so the map and its slope are continuous at the edge and it
 /// grows no faster than the input beyond it.
-pub(super) fn power(p: &[f64], v: f64, k: i32) -> f64 {
+pub(crate) fn power(p: &[f64], v: f64, k: i32) -> f64 {
     let (m, sd) =
         (p.first().copied().unwrap_or(0.0), p.get(1).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE));
     let z = (v - m) / sd;
