@@ -615,7 +615,9 @@ mod tests {
     /// as the grey-box polynomial does: on a record whose tail leaves that range, each power
     /// column is the channel's response to `z_e^k + k z_e^(k−1) (z − z_e)` (`z_e` the input held
     /// at the range's edge), built here by hand and compared at 1e-12 (the same arithmetic, one
-    /// linear filter); the linear column still follows the input itself.
+    /// linear filter), and against the column the powers held at the edge would give, which it
+    /// must miss by more than 0.1 on the tail (so the test tells the two rules apart); the
+    /// linear column still follows the input itself.
     #[test]
     fn polynomial_columns_go_on_along_their_tangent_beyond_the_training_range() {
         let n = 600;
@@ -648,6 +650,13 @@ mod tests {
                     ctx.model.channel(0, &ctx.ut[0].iter().map(|&z| tangent(z, k)).collect::<Vec<_>>());
                 let worst = col.iter().zip(&want).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
                 assert!(worst < 1e-12, "{term:?} power {k}: {worst}");
+                let held = ctx
+                    .model
+                    .channel(0, &ctx.ut[0].iter().map(|&z| z.clamp(lo, hi).powi(k)).collect::<Vec<_>>());
+                assert!(
+                    (col[450] - held[450]).abs() > 0.1,
+                    "{term:?} power {k}: indistinguishable from held"
+                );
             }
             assert_eq!(cols[powers.len()], ctx.s_channel[0], "{term:?}: the linear column");
         }
