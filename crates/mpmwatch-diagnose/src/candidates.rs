@@ -616,8 +616,8 @@ mod tests {
     /// column is the channel's response to `z_e^k + k z_e^(k−1) (z − z_e)` (`z_e` the input held
     /// at the range's edge), built here by hand and compared at 1e-12 (the same arithmetic, one
     /// linear filter), and against the column the powers held at the edge would give, which it
-    /// must miss by more than 0.1 on the tail (so the test tells the two rules apart); the
-    /// linear column still follows the input itself.
+    /// must miss by more than 0.1 at row 450, 50 rows into the tail (so the test tells the two
+    /// rules apart); the linear column still follows the input itself.
     #[test]
     fn polynomial_columns_go_on_along_their_tangent_beyond_the_training_range() {
         let n = 600;

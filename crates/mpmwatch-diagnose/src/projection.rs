@@ -133,8 +133,8 @@ impl DrivenMap {
 /// centred). The square and the lag-one product are the diagonal and the first off-diagonal of a
 /// second-order Volterra kernel in front of the channel: a product of the input at two
 /// neighbouring instants (a bilinear term) is uncorrelated with every single dither lag and,
-/// under a uniform, independent dither, with the square too: in general only a column of its
-/// own carries it.
+/// where the dither-driven part is white (an independent dither through a fast loop), with the
+/// square too: in general only a column of its own carries it.
 fn features(d: &[f64], ud: &[f64], model: &NominalArx, i: usize, has_channel: bool) -> Vec<Vec<f64>> {
     let mut z: Vec<Vec<f64>> = (0..=LAGS).map(|l| delayed(d, l)).collect();
     if has_channel {
@@ -343,8 +343,8 @@ mod tests {
     /// Power against a bilinear term in front of the channel, `G0(ud(t)·ud(t−1))` centred and
     /// scaled as the square law above (0.15 against the innovation's 0.3), with feedback. Its
     /// R² at seeds 1–4 is 0.08 to 0.14 against critical values near 0.045; with the product's
-    /// column removed from the features (checked once, by hand) it was 0.044 to 0.091 and seed
-    /// 3 fell below its critical value, so the seeds tell the two feature sets apart. Like the
+    /// column removed from the features (checked once, by hand) seeds 1–3 gave 0.055, 0.091 and
+    /// 0.044, seed 3 below its critical value, so the seeds tell the two feature sets apart. Like the
     /// square law, one of the test's features: this checks that the column works.
     #[test]
     fn the_projection_test_finds_a_product_of_neighbouring_inputs() {
