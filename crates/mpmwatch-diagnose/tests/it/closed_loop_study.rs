@@ -8,11 +8,13 @@
 //! whose loop runs away is left out (`VERBOSE=1` adds each case's draw, the locating statistics
 //! of its changed channel (MI and cross-correlation; not the dither-projection test) and every
 //! finding's candidates; `GATE=a,b` sets the honesty gate's two margins, in points:
-//! `min_gain_pct` and `closed_loop_min_gain_pct`).
+//! `min_gain_pct` and `closed_loop_min_gain_pct`; `BOTH_WAYS=1` also draws gain drops and faster
+//! responses, `wide::Directions::Both`, and ends a drop's line with the true change; `CASE=a,b`
+//! keeps the cases whose name contains one of them).
 
 use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered, fit_pct};
 use mpmwatch_sim::SimError;
-use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
+use mpmwatch_sim::scenarios::{Directions, casebook_specs, run, wide_specs};
 
 /// `GATE=a,b`: the honesty gate's `min_gain_pct` (here the small, consistent gain's margin
 /// with the class lead) and `closed_loop_min_gain_pct`, in points.
@@ -29,7 +31,8 @@ fn closed_loop_study() {
     let seed: u64 = std::env::var("SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(100);
     let n: usize = std::env::var("N").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
     let greybox = std::env::var_os("GREYBOX").is_some();
-    let only = std::env::var("CASE").ok();
+    let only: Option<Vec<String>> =
+        std::env::var("CASE").ok().map(|v| v.split(',').map(str::to_string).collect());
     // PAPER=1: localise with the paper's 6σ rule (the default until stop 32); ALPHA=a: the
     // family rule's false-alarm rate per record.
     let defaults = DiagnoseOptions::default();
@@ -52,12 +55,13 @@ fn closed_loop_study() {
     let mut weak = (0, 0);
     let wide: Option<usize> = std::env::var("WIDE").ok().and_then(|v| v.parse().ok());
     let verbose = std::env::var_os("VERBOSE").is_some();
+    let directions = if std::env::var_os("BOTH_WAYS").is_some() { Directions::Both } else { Directions::Up };
     let specs = match wide {
-        Some(count) => wide_specs(count, n, seed),
+        Some(count) => wide_specs(count, n, seed, directions),
         None => casebook_specs(n, seed),
     };
     for spec in specs {
-        if only.as_ref().is_some_and(|o| !spec.name.contains(o.as_str())) {
+        if only.as_ref().is_some_and(|o| !o.iter().any(|o| spec.name.contains(o.as_str()))) {
             continue;
         }
         // A draw whose loop runs away at every strength is no case (`scenarios::run`).
@@ -158,7 +162,7 @@ fn closed_loop_study() {
         let reported = f.is_some_and(|f| f.physics != Physics::Unexplained);
         fell += usize::from(reported && fa < fb);
         eprintln!(
-            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1} (the true plant {:6.1}; effect ratio {:.3})",
+            "{:<28} {:<16} named {:<16} on {:<8} {} held-out {:6.1} → {:6.1} (the true plant {:6.1}; effect ratio {:.3}){}",
             spec.name,
             spec.effect.physics(),
             f.map_or("none", |f| f.physics.name()),
@@ -173,7 +177,8 @@ fn closed_loop_study() {
             fb,
             fa,
             truth,
-            rec.effect_ratio
+            rec.effect_ratio,
+            if spec.decrease { format!("; {}", spec.describe(rec.strength)) } else { String::new() }
         );
     }
     eprintln!(

@@ -5,7 +5,7 @@
 //! the casebook's is withheld by the honesty gate); the casebook reports the cases not named here.
 
 use mpmwatch_diagnose::{DiagnoseOptions, Physics, diagnose_numbered};
-use mpmwatch_sim::scenarios::{casebook_specs, run, wide_specs};
+use mpmwatch_sim::scenarios::{Directions, casebook_specs, run, wide_specs};
 
 fn recovers(case: &str) {
     let spec =
@@ -62,7 +62,7 @@ fn quadratic() {
 /// effect 0.1–0.8 of the disturbance): named, on its channel, and the held-out FIT rises.
 #[test]
 fn cubic() {
-    let spec = wide_specs(48, 3000, 9000).pop().expect("48 cases");
+    let spec = wide_specs(48, 3000, 9000, Directions::Up).pop().expect("48 cases");
     assert!(spec.name.starts_with("w9047_cubic"), "{}", spec.name);
     let rec = run(&spec).unwrap();
     let d = diagnose_numbered(&rec.u, &rec.d, &rec.y, &rec.s, &DiagnoseOptions::default()).unwrap();

@@ -16,7 +16,7 @@ use serde::Serialize;
 use super::{Excitation, SimError, white_gaussian};
 
 mod wide;
-pub use wide::{NoiseDraw, PlantDraw, wide_specs};
+pub use wide::{Directions, NoiseDraw, PlantDraw, wide_specs};
 
 /// Standard deviation of every dither. Large against the disturbance (0.3) so that most of an
 /// effect on the input side is driven by the dither, which is what makes it detectable at all;
@@ -108,6 +108,9 @@ pub struct ScenarioSpec {
     /// Plant, controller, disturbance and dither drawn by [`wide_specs`]; `None` for the
     /// casebook's fixed ones.
     pub plant: Option<PlantDraw>,
+    /// A gain or time-constant change goes down (a gain drop, a faster response) instead of
+    /// up; ignored by every other effect.
+    pub decrease: bool,
 }
 
 fn ser_exc<S: serde::Serializer>(e: &Excitation, s: S) -> Result<S::Ok, S::Error> {
@@ -198,6 +201,10 @@ impl ScenarioSpec {
             Effect::NoChange | Effect::DisturbanceOnly => {
                 format!("model exact, drawn disturbance (AR {:.2}, {:.2})", p.noise.a1, p.noise.a2)
             }
+            Effect::Gain if self.decrease => format!("gain ×{:.2}", 1.0 - strength),
+            Effect::TimeConstant if self.decrease => {
+                format!("time constant ×{:.2}", 1.0 / (1.0 + 3.0 * strength))
+            }
             _ => describe(self.effect, strength),
         }
     }
@@ -271,21 +278,23 @@ pub fn run(spec: &ScenarioSpec) -> Result<ScenarioRecord, SimError> {
         return best.ok_or_else(|| SimError::Runaway { case: spec.name.clone(), limit: RUNAWAY_RATIO });
     }
     let t_max = match spec.effect {
+        Effect::Gain if spec.decrease => 0.98,
         Effect::Gain => 2.0,
         Effect::Quadratic | Effect::Cubic | Effect::Bilinear | Effect::CubicOutput => 3.0,
         Effect::MissingCoupling => 2.0,
         _ => 0.98,
     };
-    let unbounded = matches!(
-        spec.effect,
-        Effect::Gain
-            | Effect::Quadratic
-            | Effect::Cubic
-            | Effect::Bilinear
-            | Effect::CubicOutput
-            | Effect::MissingCoupling
-            | Effect::CoulombFriction
-    );
+    // A gain drop is bounded by the gain itself; a rise and the other unbounded effects are not.
+    let unbounded = match spec.effect {
+        Effect::Gain => !spec.decrease,
+        Effect::Quadratic
+        | Effect::Cubic
+        | Effect::Bilinear
+        | Effect::CubicOutput
+        | Effect::MissingCoupling
+        | Effect::CoulombFriction => true,
+        _ => false,
+    };
     // A drawn plant can need more than the casebook's range to reach its ratio: the range of an
     // unbounded strength is widened (up to 2⁶ times) until the ratio is reached or the loop breaks.
     let mut t_max = t_max;
@@ -369,10 +378,11 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
     // Effect sizes on the input side scale with the dither, which drives them.
     let ds = spec.plant.as_ref().map_or(DITHER_STD, |p| p.dither_std);
     match eff {
-        Effect::Gain => plant[cj][ci].k *= 1.0 + t,
+        Effect::Gain => plant[cj][ci].k *= if spec.decrease { 1.0 - t } else { 1.0 + t },
         Effect::TimeConstant => {
             let tau = -1.0 / model[cj][ci].a.ln();
-            plant[cj][ci].a = (-1.0 / (tau * (1.0 + 3.0 * t))).exp();
+            let factor = if spec.decrease { 1.0 / (1.0 + 3.0 * t) } else { 1.0 + 3.0 * t };
+            plant[cj][ci].a = (-1.0 / (tau * factor)).exp();
         }
         Effect::DeadTime => plant[cj][ci].d += t as usize,
         Effect::MissingCoupling => {
@@ -533,6 +543,7 @@ pub fn casebook_specs(n: usize, seed: u64) -> Vec<ScenarioSpec> {
             seed: seed + k as u64,
             target_ratio,
             plant: None,
+            decrease: false,
         })
         .collect()
 }
@@ -546,7 +557,7 @@ mod tests {
     /// near 10⁹; the next draw of the set is a case, its effect near its drawn ratio (0.1–0.8).
     #[test]
     fn a_loop_that_runs_away_at_every_strength_is_no_case() {
-        let specs = wide_specs(40, 3000, 10680);
+        let specs = wide_specs(40, 3000, 10680, Directions::Up);
         let named = |name: &str| specs.iter().find(|s| s.name == name).unwrap();
         assert!(matches!(run(named("w10691_abs_sensor_3x3")), Err(SimError::Runaway { .. })));
         assert!(run(named("w10692_time_constant_3x3")).unwrap().effect_ratio < 10.0);

@@ -154,12 +154,24 @@ fn loop_is_stable(spec: &ScenarioSpec) -> bool {
     rec.y.iter().chain(rec.u.iter()).flatten().all(|v| v.is_finite() && v.abs() < bound)
 }
 
+/// Which way a drawn gain or time-constant change goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Directions {
+    /// Up only: a larger gain, a slower response (every study up to stop 78 drew these).
+    #[default]
+    Up,
+    /// Up or down with equal chance: also a gain drop (a fouled exchanger, a worn valve) and a
+    /// faster response. Drawn after everything else, so every other draw of a seed is the same
+    /// as under [`Directions::Up`].
+    Both,
+}
+
 /// `count` scenarios of `n` samples drawn from seed `seed` (case `k` from `seed + k`): every
 /// mismatch effect of [`Effect`] and the two null cases equally likely, size 1–3 (2–3 for a
 /// missing coupling), binary or uniform dithers, concealment ratio uniform in 0.1–0.8. The
-/// linear changes sit on any channel; the effects at the actuator or sensor on a loop's own
-/// channel, as in the casebook.
-pub fn wide_specs(count: usize, n: usize, seed: u64) -> Vec<ScenarioSpec> {
+/// linear changes sit on any channel, and go the ways `directions` allows; the effects at the
+/// actuator or sensor on a loop's own channel, as in the casebook.
+pub fn wide_specs(count: usize, n: usize, seed: u64, directions: Directions) -> Vec<ScenarioSpec> {
     use Effect::*;
     // In this order: the seeds of the studies (docs/diagnose-history.md, docs/status.md) draw by
     // index into it.
@@ -209,12 +221,16 @@ pub fn wide_specs(count: usize, n: usize, seed: u64) -> Vec<ScenarioSpec> {
                 seed: seed.wrapping_add(k),
                 target_ratio,
                 plant: None,
+                decrease: false,
             };
             for _ in 0..50 {
                 spec.plant = Some(draw_plant(size, &mut rng));
                 if loop_is_stable(&spec) {
                     break;
                 }
+            }
+            if directions == Directions::Both && matches!(effect, Gain | TimeConstant) {
+                spec.decrease = rng.random::<bool>();
             }
             spec
         })
@@ -231,15 +247,54 @@ mod tests {
 
     #[test]
     fn draws_are_seeded_and_stable() {
-        let a = wide_specs(30, 600, 7);
-        assert_eq!(a, wide_specs(30, 600, 7));
-        assert_ne!(a, wide_specs(30, 600, 8));
+        let a = wide_specs(30, 600, 7, Directions::Up);
+        assert_eq!(a, wide_specs(30, 600, 7, Directions::Up));
+        assert_ne!(a, wide_specs(30, 600, 8, Directions::Up));
         for s in &a {
             assert!(loop_is_stable(s), "{} drawn unstable", s.name);
             if s.effect == Effect::MissingCoupling {
                 assert_ne!(s.channel.0, s.channel.1, "{}", s.name);
             }
             assert!(s.effect.is_mismatch() == (s.target_ratio > 0.0), "{}", s.name);
+        }
+    }
+
+    /// Both ways changes only the direction of gain and time-constant changes, and draws each
+    /// way: over 200 draws (about 27 such changes, each down with chance ½) the chance that all
+    /// go one way is below 10⁻⁷.
+    #[test]
+    fn both_ways_draws_drops_and_leaves_the_rest_of_each_draw_alone() {
+        let up = wide_specs(200, 600, 11, Directions::Up);
+        let both = wide_specs(200, 600, 11, Directions::Both);
+        let mut downs = [0, 0];
+        for (u, b) in up.iter().zip(&both) {
+            assert_eq!(*u, ScenarioSpec { decrease: false, ..b.clone() }, "{}", u.name);
+            assert!(!u.decrease);
+            if matches!(b.effect, Effect::Gain | Effect::TimeConstant) {
+                downs[usize::from(b.decrease)] += 1;
+            } else {
+                assert!(!b.decrease, "{}", b.name);
+            }
+        }
+        assert!(downs[0] > 0 && downs[1] > 0, "up/down {downs:?}");
+    }
+
+    /// A drawn gain drop is simulated as one: on a 1×1 plant the true output driven by the
+    /// recorded MV is the nominal's times `1 − strength` (same pole, same dead time, zero start),
+    /// to rounding.
+    #[test]
+    fn a_gain_drop_is_simulated_as_a_drop() {
+        let both = wide_specs(600, 600, 11, Directions::Both);
+        let drop = both
+            .iter()
+            .find(|s| s.effect == Effect::Gain && s.decrease && s.size == 1)
+            .expect("a 1×1 drop among 600 draws");
+        let rec = super::super::run(drop).expect("a case");
+        let t = rec.strength;
+        assert!(t > 0.0 && t < 1.0, "strength {t}");
+        assert!(drop.describe(t).starts_with("gain ×0."), "{}", drop.describe(t));
+        for (p, s) in rec.plant_output[0].iter().zip(&rec.s[0]) {
+            assert!((p - (1.0 - t) * s).abs() <= 1e-9 * (1.0 + s.abs()), "{p} against {}", (1.0 - t) * s);
         }
     }
 

@@ -22,6 +22,7 @@ fn spec(effect: Effect, excitation: Excitation, seed: u64) -> ScenarioSpec {
         seed,
         target_ratio: 0.6,
         plant: None,
+        decrease: false,
     }
 }
 

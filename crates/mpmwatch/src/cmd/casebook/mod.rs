@@ -11,7 +11,7 @@ use anyhow::Context;
 use mpmwatch::report::figures::{BeforeAfter, write_before_after_chart};
 use mpmwatch_diagnose::{DiagnoseOptions, Physics, diagnose_numbered};
 use mpmwatch_sim::SimError;
-use mpmwatch_sim::scenarios::{casebook_specs, run as run_case, wide_specs};
+use mpmwatch_sim::scenarios::{Directions, casebook_specs, run as run_case, wide_specs};
 use serde_json::json;
 
 /// Arguments of the verb (documented on the verb in `main.rs`).
@@ -44,6 +44,11 @@ pub struct Args {
     /// and concealment ratio (0.1–0.8). Case k uses seed + k.
     #[arg(long, value_name = "COUNT", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     wide: Option<usize>,
+    /// With --wide: let a drawn gain or time-constant change also go down (a gain drop, a
+    /// faster response), each way with equal chance. Off, the draws match every study in
+    /// docs/ up to stop 78, which drew increases only.
+    #[arg(long, requires = "wide")]
+    both_ways: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -52,7 +57,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = DiagnoseOptions::default();
     let mut specs = match (args.real_only, args.wide) {
         (true, _) => Vec::new(),
-        (false, Some(count)) => wide_specs(count, args.n, args.seed),
+        (false, Some(count)) => {
+            let directions = if args.both_ways { Directions::Both } else { Directions::Up };
+            wide_specs(count, args.n, args.seed, directions)
+        }
         (false, None) => casebook_specs(args.n, args.seed),
     };
     if !args.only.is_empty() {
