@@ -8,9 +8,9 @@
 //! whose loop runs away is left out (`VERBOSE=1` adds each case's draw, the locating statistics
 //! of its changed channel (MI and cross-correlation; not the dither-projection test) and every
 //! finding's candidates; `GATE=a,b` sets the honesty gate's two margins, in points:
-//! `min_gain_pct` and `closed_loop_min_gain_pct`; `BOTH_WAYS=1` also draws gain drops and faster
-//! responses, `wide::Directions::Both`, and ends a drop's line with the true change; `CASE=a,b`
-//! keeps the cases whose name contains one of them).
+//! `min_gain_pct` and `closed_loop_min_gain_pct`; `BOTH_WAYS=1` also draws gain drops, faster
+//! responses and shorter delays, `wide::Directions::Both`, and ends such a line with the true
+//! change; `CASE=a,b` keeps the cases whose name contains one of them).
 
 use mpmwatch_diagnose::{DiagnoseOptions, Method, Physics, diagnose_numbered, fit_pct};
 use mpmwatch_sim::SimError;

@@ -108,8 +108,8 @@ pub struct ScenarioSpec {
     /// Plant, controller, disturbance and dither drawn by [`wide_specs`]; `None` for the
     /// casebook's fixed ones.
     pub plant: Option<PlantDraw>,
-    /// A gain or time-constant change goes down (a gain drop, a faster response) instead of
-    /// up; ignored by every other effect.
+    /// A gain, time-constant or dead-time change goes down (a gain drop, a faster response, a
+    /// shorter delay than the model's) instead of up; ignored by every other effect.
     pub decrease: bool,
 }
 
@@ -202,6 +202,7 @@ impl ScenarioSpec {
                 format!("model exact, drawn disturbance (AR {:.2}, {:.2})", p.noise.a1, p.noise.a2)
             }
             Effect::Gain if self.decrease => format!("gain ×{:.2}", 1.0 - strength),
+            Effect::DeadTime if self.decrease => format!("−{strength:.0} samples dead time"),
             Effect::TimeConstant if self.decrease => {
                 format!("time constant ×{:.2}", 1.0 / (1.0 + 3.0 * strength))
             }
@@ -384,6 +385,8 @@ fn simulate_centred(spec: &ScenarioSpec, t: f64, q0: f64, d: &[Vec<f64>], v: &[V
             let factor = if spec.decrease { 1.0 / (1.0 + 3.0 * t) } else { 1.0 + 3.0 * t };
             plant[cj][ci].a = (-1.0 / (tau * factor)).exp();
         }
+        // A shorter dead time is the model's longer one: the plant keeps its drawn delay.
+        Effect::DeadTime if spec.decrease => model[cj][ci].d += t as usize,
         Effect::DeadTime => plant[cj][ci].d += t as usize,
         Effect::MissingCoupling => {
             model[cj][ci].k = 0.0;

@@ -154,15 +154,16 @@ fn loop_is_stable(spec: &ScenarioSpec) -> bool {
     rec.y.iter().chain(rec.u.iter()).flatten().all(|v| v.is_finite() && v.abs() < bound)
 }
 
-/// Which way a drawn gain or time-constant change goes.
+/// Which way a drawn gain, time-constant or dead-time change goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Directions {
-    /// Up only: a larger gain, a slower response (every study up to stop 78 drew these).
+    /// Up only: a larger gain, a slower response, a longer delay (every study up to stop 78
+    /// drew these).
     #[default]
     Up,
-    /// Up or down with equal chance: also a gain drop (a fouled exchanger, a worn valve) and a
-    /// faster response. Drawn after everything else, so every other draw of a seed is the same
-    /// as under [`Directions::Up`].
+    /// Up or down with equal chance: also a gain drop (a fouled exchanger, a worn valve), a
+    /// faster response and a delay shorter than the model's. Drawn after everything else, so
+    /// every other draw of a seed is the same as under [`Directions::Up`].
     Both,
 }
 
@@ -229,7 +230,7 @@ pub fn wide_specs(count: usize, n: usize, seed: u64, directions: Directions) -> 
                     break;
                 }
             }
-            if directions == Directions::Both && matches!(effect, Gain | TimeConstant) {
+            if directions == Directions::Both && matches!(effect, Gain | TimeConstant | DeadTime) {
                 spec.decrease = rng.random::<bool>();
             }
             spec
@@ -259,9 +260,9 @@ mod tests {
         }
     }
 
-    /// Both ways changes only the direction of gain and time-constant changes, and draws each
-    /// way: over 200 draws (about 27 such changes, each down with chance ½) the chance that all
-    /// go one way is below 10⁻⁷.
+    /// Both ways changes only the direction of gain, time-constant and dead-time changes, and
+    /// draws each way: over 200 draws (about 40 such changes, each down with chance ½) the
+    /// chance that all go one way is below 10⁻¹¹.
     #[test]
     fn both_ways_draws_drops_and_leaves_the_rest_of_each_draw_alone() {
         let up = wide_specs(200, 600, 11, Directions::Up);
@@ -270,7 +271,7 @@ mod tests {
         for (u, b) in up.iter().zip(&both) {
             assert_eq!(*u, ScenarioSpec { decrease: false, ..b.clone() }, "{}", u.name);
             assert!(!u.decrease);
-            if matches!(b.effect, Effect::Gain | Effect::TimeConstant) {
+            if matches!(b.effect, Effect::Gain | Effect::TimeConstant | Effect::DeadTime) {
                 downs[usize::from(b.decrease)] += 1;
             } else {
                 assert!(!b.decrease, "{}", b.name);

@@ -44,9 +44,9 @@ pub struct Args {
     /// and concealment ratio (0.1–0.8). Case k uses seed + k.
     #[arg(long, value_name = "COUNT", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     wide: Option<usize>,
-    /// With --wide: let a drawn gain or time-constant change also go down (a gain drop, a
-    /// faster response), each way with equal chance. Off, the draws match every study in
-    /// docs/ up to stop 78, which drew increases only.
+    /// With --wide: let a drawn gain, time-constant or dead-time change also go down (a gain
+    /// drop, a faster response, a delay shorter than the model's), each way with equal chance.
+    /// Off, the draws match every study in docs/ up to stop 78, which drew increases only.
     #[arg(long, requires = "wide")]
     both_ways: bool,
 }
