@@ -299,6 +299,26 @@ mod tests {
         }
     }
 
+    /// A drawn shorter delay is the model's longer one: on a 1×1 plant the nominal driven by
+    /// the recorded MV is the true output shifted late by the strength's samples, exactly.
+    #[test]
+    fn a_shorter_delay_is_the_models_longer_one() {
+        let both = wide_specs(600, 600, 11, Directions::Both);
+        let spec = both
+            .iter()
+            .find(|s| s.effect == Effect::DeadTime && s.decrease && s.size == 1)
+            .expect("a 1×1 shorter delay among 600 draws");
+        let rec = super::super::run(spec).expect("a case");
+        let t = rec.strength as usize;
+        assert!((1..=6).contains(&t), "strength {}", rec.strength);
+        assert_eq!(spec.describe(rec.strength), format!("−{t} samples dead time"));
+        let (p, s) = (&rec.plant_output[0], &rec.s[0]);
+        assert!(s[..t].iter().all(|v| *v == 0.0), "the nominal starts {t} samples later");
+        for k in t..p.len() {
+            assert!((s[k] - p[k - t]).abs() <= 1e-12 * (1.0 + p[k - t].abs()), "row {k}");
+        }
+    }
+
     #[test]
     fn the_disturbance_has_the_drawn_std_and_spectrum() {
         let noise = NoiseDraw { a1: 0.8, a2: 0.0, std: 0.3, steps: 0, step_std: 0.0 };
