@@ -103,8 +103,11 @@ pub enum ActsOn {
 pub enum Term {
     /// `θ·s_ji`: the channel's gain scaled by `1 + θ`.
     Gain,
-    /// `s_ji(t − d) − s_ji(t)`: `d` more samples of dead time.
-    DeadTime(usize),
+    /// `s_ji(t − d) − s_ji(t)`: `d` more samples of dead time, or with `d < 0` fewer: the
+    /// model's delay too long (a pure delay measured in a different line-up, a transport that
+    /// got faster). A shorter delay is tried only as far as the model's own delay allows while
+    /// the channel stays strictly causal.
+    DeadTime(isize),
     /// A unit-gain lead–lag moving the dominant pole from `p0` to `p1`.
     TimeConstant { p0: f64, p1: f64 },
     /// A first-order lag `(1−p) q^−d/(1 − p q^−1)` of the input where the model has none.
@@ -347,7 +350,15 @@ impl OutputCtx {
         };
         match term {
             Term::Gain => vec![sc.clone()],
-            Term::DeadTime(d) => vec![delayed(sc, *d).iter().zip(sc).map(|(a, b)| a - b).collect()],
+            Term::DeadTime(d) => {
+                // A shorter delay is the channel's response to the input moved earlier; the
+                // input's held last value is never reached (the grid keeps `−d` below the delay).
+                let shifted = match usize::try_from(*d) {
+                    Ok(later) => delayed(sc, later),
+                    Err(_) => self.channel_response(i, &advanced(u, d.unsigned_abs())),
+                };
+                vec![shifted.iter().zip(sc).map(|(a, b)| a - b).collect()]
+            }
             Term::TimeConstant { p0, p1 } => {
                 let k = (1.0 - p1) / (1.0 - p0);
                 let ll = first_order(vec![k, -k * p0], *p1, sc);
@@ -462,6 +473,12 @@ pub fn play(u: &[f64], w: f64) -> Vec<f64> {
 /// of its 95th percentile (see [`grid`]).
 const EVEN_WIDTHS: [f64; 5] = [0.2, 0.35, 0.5, 0.65, 0.8];
 
+/// `x(t + d)`, the last value held past the end.
+fn advanced(x: &[f64], d: usize) -> Vec<f64> {
+    let last = x.len().saturating_sub(1);
+    (0..x.len()).map(|t| x[(t + d).min(last)]).collect()
+}
+
 /// The grid of concrete terms tried on input `i` of this output (bilinear excluded: its lags
 /// are chosen by FROLS in the fitter).
 pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term> {
@@ -478,6 +495,8 @@ pub fn grid(ctx: &OutputCtx, i: usize, rows: std::ops::Range<usize>) -> Vec<Term
     let s = &ctx.s[rows.clone()];
     out.push(Term::Gain);
     out.extend((1..=8).map(Term::DeadTime));
+    let shorter = ctx.delay(i).saturating_sub(1).min(8) as isize;
+    out.extend((1..=shorter).map(|d| Term::DeadTime(-d)));
     // The dominant pole is the linear nominal's also where polynomial channels exist: their
     // denominator is shared by every power of every input, so their linearisation's step is a
     // poor reading of one channel's speed (docs/diagnose-history.md, stop 40).
@@ -711,6 +730,36 @@ mod tests {
             !grid(&ctx, 0, 0..n).iter().any(|t| matches!(t, Term::SaturationIn { lo, hi } if lo >= hi)),
             "a limit of width zero"
         );
+    }
+
+    /// A model whose delay is two samples too long (four where the plant has two, a first-order
+    /// channel, uniform input, seed 9): the grid offers shorter delays down to one sample
+    /// (strictly causal) and no further, and the two-samples-shorter column is the plant's
+    /// output minus the model's exactly, once the start's transient (pole 0.7, from row 100
+    /// below 1e-15) has gone.
+    #[test]
+    fn a_delay_shorter_than_the_models_is_the_channel_moved_earlier() {
+        use mpmwatch_core::model::DiscreteTf;
+        use rand::{Rng, SeedableRng};
+        let n = 800;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let u: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let with_delay = |d| DiscreteTf::new(vec![0.3], vec![1.0, -0.7], d).unwrap().simulate_from_rest(&u);
+        let (s, y) = (with_delay(4), with_delay(2));
+        let ctx = crate::plan::output_ctx(&[&u], &s, &crate::plan::open_split(20..n));
+        assert_eq!(ctx.delay(0), 4);
+        let shorter: Vec<isize> = grid(&ctx, 0, 20..n)
+            .iter()
+            .filter_map(|t| match t {
+                Term::DeadTime(d) if *d < 0 => Some(*d),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(shorter, vec![-1, -2, -3]);
+        let col = &ctx.columns(0, &Term::DeadTime(-2))[0];
+        let spread = mpmwatch_core::numerics::rms(&s);
+        let err = (100..n).map(|t| (col[t] - (y[t] - s[t])).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-9 * spread, "largest error {err} against a spread of {spread}");
     }
 
     #[test]

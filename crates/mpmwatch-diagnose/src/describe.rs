@@ -33,12 +33,14 @@ pub fn describe(
         }
         Term::DeadTime(d) => {
             let d0 = ctx.delay(i) as f64 * ts;
-            p.insert("extra_dead_time_s".into(), *d as f64 * ts);
-            p.insert("dead_time_s".into(), d0 + *d as f64 * ts);
+            let extra = *d as f64 * ts;
+            p.insert("extra_dead_time_s".into(), extra);
+            p.insert("dead_time_s".into(), d0 + extra);
             format!(
-                "{output} answers {input} {} s later than the model says (dead time {} s, not {} s)",
-                num(*d as f64 * ts),
-                num(d0 + *d as f64 * ts),
+                "{output} answers {input} {} s {} than the model says (dead time {} s, not {} s)",
+                num(extra.abs()),
+                if *d >= 0 { "later" } else { "earlier" },
+                num(d0 + extra),
                 num(d0)
             )
         }
