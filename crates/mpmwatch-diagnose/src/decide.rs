@@ -1,6 +1,6 @@
-//! The residual-correction path's decision for one output: the best-scored hypothesis must
-//! beat no correction, then pass the honesty gate (its plain FIT gain on the training part's
-//! folds); otherwise the finding is `unexplained`, with what was tried and how it scored.
+//! The residual-correction path's decision for one output: the first class in score order that
+//! beats no correction and passes the honesty gate (its plain FIT gain on the training part's
+//! folds) is the finding; otherwise it is `unexplained`, with what was tried and how it scored.
 
 use std::collections::BTreeMap;
 
@@ -274,11 +274,12 @@ mod tests {
         assert!(!gate_passes(&g(0.4, 0.4), f64::INFINITY, false, &o));
     }
 
-    /// Fresh case w50234 (a 1×1 gain drop to 0.54×, closed loop), as scored: backlash and a
-    /// time constant rank first and lose 23 and 21 points on the training blocks, the gain third
-    /// gains 77. The gain is the finding; before stop 79 the top class's failure withheld it. A
-    /// class behind another with a small consistent gain is not singled out by the top class's
-    /// lead, and nothing passes where every class fails or none beats no correction.
+    /// Case w50234 (a 1×1 gain drop to 0.54×, closed loop; drawn fresh at stop 79, development
+    /// since) as stop 78's build scored it: backlash and a time constant rank first and lose 23
+    /// and 21 points on the training blocks, the gain third gains 77. Given these, the gain is the
+    /// finding; the old rule, gating the top class only, withheld it. A class behind another with
+    /// a small consistent gain is not singled out by the top class's lead, and nothing passes
+    /// where every class fails or none beats no correction.
     #[test]
     fn a_class_that_fails_the_gate_does_not_withhold_one_below_it() {
         let o = DiagnoseOptions::default();
