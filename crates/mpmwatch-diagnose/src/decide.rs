@@ -1,6 +1,6 @@
-//! The residual-correction path's decision for one output: the first class in score order that
-//! beats no correction and passes the honesty gate (its plain FIT gain on the training part's
-//! folds) is the finding; otherwise it is `unexplained`, with what was tried and how it scored.
+//! The residual-correction path's decision for one output: the best-scored hypothesis must
+//! beat no correction, then pass the honesty gate (its plain FIT gain on the training part's
+//! folds); otherwise the finding is `unexplained`, with what was tried and how it scored.
 
 use std::collections::BTreeMap;
 
@@ -33,22 +33,6 @@ pub(crate) fn decide(
     let mut seen: Vec<Physics> = Vec::new();
     // The cross-validated gain of the best-ranked fitted hypothesis (`None`: its refit failed).
     let mut top_gain: Option<Option<CvGain>> = None;
-    // The honesty gate: the winner must also raise the plain FIT (what the held-out FIT
-    // measures) on the training part's blocks by a margin on average, as on the grey-box path,
-    // over the nominal and over the intercept alone, so that an offset does not pass for physics.
-    // A closed loop has its own margin (larger by default) and no block is required to gain: there the plain
-    // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
-    // so small average gains are noise, while large ones that lost on one block held up on the
-    // held-out tail (docs/diagnose-history.md, "The closed loop's margin"). A smaller gain passes there
-    // too when it is consistent (the open-loop margin on average, no block lower) and the data
-    // single out its class: its score leads every other class's by `CLASS_LEAD`. A small gain
-    // that several classes share says that something is there, not what.
-    let margin = if split.closed_loop { opts.closed_loop_min_gain_pct } else { opts.min_gain_pct };
-    let lead = class_lead(ranked);
-    // The lead is read as evidence only where the score is a likelihood: the prediction error.
-    let likelihood = opts.scoring == select::Scoring::Prediction;
-    // Each class's best hypothesis, in rank order, with its cross-validated gain.
-    let mut classes: Vec<(&select::Scored, Option<CvGain>)> = Vec::new();
     for s in ranked {
         let Some(f) = &s.fitted else { continue };
         let ph = f.term.physics();
@@ -65,12 +49,25 @@ pub(crate) fn decide(
                 validation_gain_pct: g.mean,
             });
         }
-        classes.push((s, g));
     }
-    let scores: Vec<(f64, Option<CvGain>)> = classes.iter().map(|(s, g)| (s.score, *g)).collect();
-    let lead = if likelihood { lead } else { f64::NEG_INFINITY };
-    let best = first_passing(&scores, null_score, lead, split.closed_loop, opts).map(|k| classes[k].0);
+    let best = ranked.first().filter(|s| s.fitted.is_some() && s.score < null_score);
+    // The honesty gate: the winner must also raise the plain FIT (what the held-out FIT
+    // measures) on the training part's blocks by a margin on average, as on the grey-box path,
+    // over the nominal and over the intercept alone, so that an offset does not pass for physics.
+    // A closed loop has its own margin (larger by default) and no block is required to gain: there the plain
+    // FIT is a weak witness (the nominal error partly cancels the disturbance through feedback),
+    // so small average gains are noise, while large ones that lost on one block held up on the
+    // held-out tail (docs/diagnose-history.md, "The closed loop's margin"). A smaller gain passes there
+    // too when it is consistent (the open-loop margin on average, no block lower) and the data
+    // single out its class: its score leads every other class's by `CLASS_LEAD`. A small gain
+    // that several classes share says that something is there, not what.
+    let margin = if split.closed_loop { opts.closed_loop_min_gain_pct } else { opts.min_gain_pct };
+    let lead = class_lead(ranked);
+    // The lead is read as evidence only where the score is a likelihood: the prediction error.
+    let likelihood = opts.scoring == select::Scoring::Prediction;
+    let passes = |g: &CvGain| gate_passes(g, if likelihood { lead } else { 0.0 }, split.closed_loop, opts);
     let top_gain = top_gain.flatten();
+    let best = best.filter(|_| top_gain.is_some_and(|g| passes(&g)));
     let out_name = input.outputs[j].name;
     if let Some((f, grid)) = best.and_then(|b| b.fitted.clone().map(|f| (f, b.grid.clone()))) {
         // Refit the chosen hypothesis on the whole training part (its grid values fixed, or
@@ -151,24 +148,6 @@ fn gate_passes(g: &CvGain, lead: f64, closed_loop: bool, opts: &DiagnoseOptions)
     }
     g.mean >= opts.closed_loop_min_gain_pct
         || (g.mean >= opts.min_gain_pct && g.min >= 0.0 && lead >= CLASS_LEAD)
-}
-
-/// Which class is the finding: the first of `classes` (each class's best score and its
-/// cross-validated gain, in rank order) that beats no correction (`null_score`) and passes the
-/// gate, as on the grey-box walk since stop 72, so that a class that fails the gate does not
-/// withhold one below it that passes. Only the first class can be singled out by its `lead`; a
-/// class ranked below another is not, and needs the full margin.
-fn first_passing(
-    classes: &[(f64, Option<CvGain>)],
-    null_score: f64,
-    lead: f64,
-    closed_loop: bool,
-    opts: &DiagnoseOptions,
-) -> Option<usize> {
-    classes.iter().enumerate().position(|(k, (score, g))| {
-        let own_lead = if k == 0 { lead } else { f64::NEG_INFINITY };
-        *score < null_score && g.is_some_and(|g| gate_passes(&g, own_lead, closed_loop, opts))
-    })
 }
 
 /// The lead, in score units, by which a closed-loop finding with a small but consistent gain
@@ -272,25 +251,6 @@ mod tests {
         assert!(gate_passes(&g(2.0, -50.0), 0.0, true, &o));
         assert!(gate_passes(&g(0.5, -3.0), 0.0, false, &o));
         assert!(!gate_passes(&g(0.4, 0.4), f64::INFINITY, false, &o));
-    }
-
-    /// Case w50234 (a 1×1 gain drop to 0.54×, closed loop; drawn fresh at stop 79, development
-    /// since) as stop 78's build scored it: backlash and a time constant rank first and lose 23
-    /// and 21 points on the training blocks, the gain third gains 77. Given these, the gain is the
-    /// finding; the old rule, gating the top class only, withheld it. A class behind another with
-    /// a small consistent gain is not singled out by the top class's lead, and nothing passes
-    /// where every class fails or none beats no correction.
-    #[test]
-    fn a_class_that_fails_the_gate_does_not_withhold_one_below_it() {
-        let o = DiagnoseOptions::default();
-        let g = |mean, min| Some(CvGain { mean, min });
-        let w50234 = [(-240.7, g(-23.1, -124.1)), (-236.2, g(-21.3, -90.0)), (-192.9, g(77.2, 10.0))];
-        assert_eq!(first_passing(&w50234, 0.0, 4.5, true, &o), Some(2));
-        let small_behind = [(-300.0, g(-5.0, -9.0)), (-250.0, g(1.0, 0.5))];
-        assert_eq!(first_passing(&small_behind, 0.0, 50.0, true, &o), None);
-        assert_eq!(first_passing(&[(-300.0, g(1.0, 0.5))], 0.0, 50.0, true, &o), Some(0));
-        assert_eq!(first_passing(&[(-300.0, g(-5.0, -9.0)), (-250.0, None)], 0.0, 50.0, true, &o), None);
-        assert_eq!(first_passing(&[(5.0, g(30.0, 10.0))], 0.0, 50.0, true, &o), None);
     }
 
     /// Three validation blocks of a unit-variance nominal output `s` (one-sample delay of a
