@@ -17,7 +17,7 @@ use rayon::prelude::*;
 /// validation error of the corrected residual).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Scoring {
-    /// One-step prediction error of the corrected residual under an AR noise model fitted on the
+    /// One-step prediction error of the corrected residual under a [`NoiseModel`] fitted on the
     /// fit rows (the *direct* prediction-error method of closed-loop identification). The
     /// correction is evaluated on the recorded inputs. Under the true hypothesis the corrected
     /// residual is the disturbance alone, whose innovation is independent of everything before
